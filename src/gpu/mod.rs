@@ -1,0 +1,1 @@
+//! Headless wgpu: context, shader loading and validation, readback.

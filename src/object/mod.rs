@@ -1,0 +1,1 @@
+//! Objects pressed into the finger: the seven built-in solids and loaded meshes.
