@@ -1,1 +1,111 @@
-fn main() {}
+//! Renderer throughput at the paper sensor's 640x480, printed as a table:
+//! `cargo bench --bench render` (add `-- --frames N` for more frames per row).
+//!
+//! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
+//! sensor), one contact per submission, and batches of contacts per submission; each split
+//! into CPU preparation, GPU render (submit + wait) and readback (copy, map, unpack).
+
+use geltip::object::{Object, Solid};
+use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
+use geltip::render::{Contact, Place};
+use geltip::sensor::Sensor;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+fn contacts(n: usize) -> Vec<Contact> {
+    let places = [
+        Place::Rotation(0.0),
+        Place::Rotation(30.0),
+        Place::Rotation(45.0),
+        Place::Rotation(60.0),
+        Place::Translation(0.0),
+        Place::Translation(5.0),
+        Place::Translation(10.0),
+        Place::Translation(15.0),
+    ];
+    (0..n)
+        .map(|i| Contact {
+            object: Arc::new(Object::Solid(Solid::ALL[i % Solid::ALL.len()])),
+            place: places[i % places.len()],
+            azimuth_deg: (i * 37 % 360) as f64,
+            spin_deg: 0.0,
+            depth_mm: 1.0,
+        })
+        .collect()
+}
+
+fn row(name: &str, frames: usize, wall: Duration, t: Timings) {
+    let per = |d: Duration| d.as_secs_f64() * 1e3 / frames as f64;
+    println!(
+        "| {name:<28} | {frames:>6} | {:>8.1} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.2} |",
+        frames as f64 / wall.as_secs_f64(),
+        per(wall),
+        per(t.prepare),
+        per(t.render),
+        per(t.readback),
+    );
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let frames: usize = args
+        .iter()
+        .position(|a| a == "--frames")
+        .and_then(|i| args.get(i + 1))
+        .map(|v| v.parse())
+        .transpose()?
+        .unwrap_or(64);
+    let sensor = Sensor::preset("paper")?;
+    let start = Instant::now();
+    let mut r = Renderer::new(&sensor)?;
+    let info = r.adapter().clone();
+    println!(
+        "geltip render benchmark: {}x{}, adapter {} ({:?}), start-up {:.2} s",
+        sensor.width,
+        sensor.height,
+        info.name,
+        info.backend,
+        start.elapsed().as_secs_f64()
+    );
+    println!(
+        "| {:<28} | {:>6} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} |",
+        "what", "frames", "fps", "ms/frame", "prepare", "render", "readback"
+    );
+    println!(
+        "|{:-<30}|{:->8}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|",
+        "", "", "", "", "", "", ""
+    );
+
+    let n_ref = (frames / 8).max(4);
+    let mut t = Timings::default();
+    let start = Instant::now();
+    for _ in 0..n_ref {
+        r.render_reference()?;
+        let rt = r.timings();
+        t.render += rt.render;
+        t.readback += rt.readback;
+    }
+    row("no contact, full ray cast", n_ref, start.elapsed(), t);
+
+    let list = contacts(frames);
+    let mut t = Timings::default();
+    let start = Instant::now();
+    for c in &list {
+        r.render(c)?;
+        let rt = r.timings();
+        t.prepare += rt.prepare;
+        t.render += rt.render;
+        t.readback += rt.readback;
+    }
+    row("one contact per submit", frames, start.elapsed(), t);
+
+    let start = Instant::now();
+    r.render_batch(&list)?;
+    row(
+        &format!("batches of {MAX_BATCH} contacts"),
+        frames,
+        start.elapsed(),
+        r.timings(),
+    );
+    Ok(())
+}

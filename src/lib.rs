@@ -17,3 +17,4 @@ pub mod gpu;
 pub mod localise;
 pub mod object;
 pub mod output;
+pub mod render;

@@ -1,10 +1,16 @@
 //! The `geltip` command line.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use geltip::object::Object;
+use geltip::output;
+use geltip::render::gpu::Renderer;
+use geltip::render::{Contact, Frame, Place};
 use geltip::sensor::{Sensor, PRESETS};
 use glam::{DVec2, DVec3};
 use serde_json::json;
+use std::path::PathBuf;
+use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(
@@ -41,6 +47,60 @@ enum Command {
         y: f64,
         z: f64,
     },
+    /// Render a tactile image: an object pressed into the finger, or the empty finger.
+    ///
+    /// Examples:
+    ///   geltip render --sensor paper --object sphere --at rotation=45 --depth 1 -o sphere.png --labels sphere.json
+    ///   geltip render --sensor paper --reference -o ref.png
+    #[command(allow_negative_numbers = true, verbatim_doc_comment)]
+    Render {
+        /// Preset name or path to a sensor TOML file.
+        #[arg(long)]
+        sensor: String,
+        /// Render the empty finger (the reference frame detectors subtract).
+        #[arg(long, conflicts_with_all = ["object", "at", "depth", "azimuth", "spin", "labels"])]
+        reference: bool,
+        /// A built-in solid (cone, sphere, irregular-prism, cylinder, edge, tube, slab) or a
+        /// mesh file (.obj, .gltf, .glb) whose +z points at the finger.
+        #[arg(long, required_unless_present = "reference")]
+        object: Option<String>,
+        /// Where: rotation=<deg> about the tip (0 = tip, 90 = junction), translation=<mm>
+        /// along the side below the junction, or s=<mm> of arc length from the tip.
+        #[arg(long, required_unless_present = "reference")]
+        at: Option<String>,
+        /// Azimuth of the contact about the finger's axis, degrees (0 = image +x).
+        #[arg(long, default_value_t = 0.0)]
+        azimuth: f64,
+        /// The object's rotation about the contact normal, degrees.
+        #[arg(long, default_value_t = 0.0)]
+        spin: f64,
+        /// Press depth along the surface normal, mm.
+        #[arg(long, required_unless_present = "reference")]
+        depth: Option<f64>,
+        /// Output PNG.
+        #[arg(short = 'o', long = "output")]
+        output: PathBuf,
+        /// Ground truth as JSON (object, point, pixel, normal, depth_mm, region, mask...).
+        #[arg(long)]
+        labels: Option<PathBuf>,
+        /// Indentation (mm) each pixel sees, as a float32 NumPy array (height x width).
+        #[arg(long = "depth-map")]
+        depth_map: Option<PathBuf>,
+    },
+    /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
+    Objects {
+        /// Directory to write into.
+        #[arg(long, default_value = "assets/objects")]
+        out: PathBuf,
+    },
+}
+
+fn write_frame(frame: &Frame, png: &PathBuf, depth_map: Option<&PathBuf>) -> Result<()> {
+    output::write_png_rgb8(png, frame.width, frame.height, frame.to_rgb().as_raw())?;
+    if let Some(path) = depth_map {
+        output::write_npy_f32(path, frame.width, frame.height, &frame.indentation)?;
+    }
+    Ok(())
 }
 
 fn main() {
@@ -78,6 +138,54 @@ fn run(cli: Cli) -> Result<()> {
                 Err(why) => json!({ "pixel": null, "reason": why.to_string() }),
             };
             println!("{out}");
+        }
+        Command::Render {
+            sensor,
+            reference,
+            object,
+            at,
+            azimuth,
+            spin,
+            depth,
+            output: png,
+            labels,
+            depth_map,
+        } => {
+            let sensor = Sensor::load(&sensor)?;
+            if reference {
+                let renderer = Renderer::new(&sensor)?;
+                write_frame(renderer.reference(), &png, depth_map.as_ref())?;
+                println!("{}", json!({ "image": png, "reference": true }));
+                return Ok(());
+            }
+            let (object, at, depth) = (
+                object.context("--object is required")?,
+                at.context("--at is required")?,
+                depth.context("--depth is required")?,
+            );
+            let contact = Contact {
+                object: Arc::new(Object::from_arg(&object)?),
+                place: Place::parse(&at)?,
+                azimuth_deg: azimuth,
+                spin_deg: spin,
+                depth_mm: depth,
+            };
+            // Refuse a bad pose before paying for the GPU's start-up.
+            contact.pose(&sensor)?;
+            let mut renderer = Renderer::new(&sensor)?;
+            let (frame, truth) = renderer.render(&contact)?;
+            write_frame(&frame, &png, depth_map.as_ref())?;
+            if let Some(path) = &labels {
+                output::write_json(path, &truth.to_json())?;
+            }
+            if truth.over_pressed {
+                eprintln!("warning: the object pressed the gel against the rigid shell (depth beyond {} mm)", sensor.finger.shell_thickness);
+            }
+            println!("{}", truth.to_json());
+        }
+        Command::Objects { out } => {
+            geltip::object::write_builtin_objects(&out)?;
+            println!("{}", json!({ "written": out }));
         }
     }
     Ok(())

@@ -48,6 +48,112 @@ pub struct ImageConfig {
     pub height: u32,
 }
 
+/// `[elastomer]`: how the gel turns the object's penetration into a deformation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ElastomerConfig {
+    /// Standard deviation (mm, along the surface) of the blur that blends the imprint's edge.
+    pub blend_mm: f64,
+    /// How much of the displaced gel bulges out around the imprint (0 = none): the bulge is
+    /// this fraction of the difference between a blend twice as wide and the blend itself.
+    pub bulge: f64,
+}
+
+impl Default for ElastomerConfig {
+    fn default() -> Self {
+        ElastomerConfig {
+            blend_mm: 0.5,
+            bulge: 0.3,
+        }
+    }
+}
+
+/// LED colours: one red, one green and one blue LED, or three white ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LedColours {
+    Rgb,
+    White,
+}
+
+/// `[leds]`: three point lights at the base of the finger, 120 degrees apart.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LedsConfig {
+    pub colours: LedColours,
+    /// Height of the LED ring (mm, along the optical axis; the camera is at 0).
+    pub z_mm: f64,
+    /// Azimuth of the first (red) LED in degrees; the others follow at +120 and +240.
+    pub azimuth_deg: f64,
+    /// Radiant intensity scale.
+    pub intensity: f64,
+    /// Distance (mm) at which the light has fallen to half: 1 / (1 + (dist / falloff)^2).
+    pub falloff_mm: f64,
+    /// The LEDs shine up the finger (+z): emission falls as cos(angle off +z)^spread
+    /// (0 = the same in every direction).
+    pub spread: f64,
+    /// Light reaching every point regardless of the LEDs.
+    pub ambient: f64,
+}
+
+impl Default for LedsConfig {
+    fn default() -> Self {
+        LedsConfig {
+            colours: LedColours::Rgb,
+            z_mm: -2.0,
+            azimuth_deg: 90.0,
+            intensity: 2.0,
+            falloff_mm: 10.0,
+            spread: 2.0,
+            ambient: 0.06,
+        }
+    }
+}
+
+/// `[paint]`: the reflective coating on the elastomer's outer skin.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PaintConfig {
+    pub diffuse: f64,
+    pub specular: f64,
+    pub shininess: f64,
+}
+
+impl Default for PaintConfig {
+    fn default() -> Self {
+        PaintConfig {
+            diffuse: 0.9,
+            specular: 0.35,
+            shininess: 24.0,
+        }
+    }
+}
+
+/// `[render]`: the knobs that trade speed for accuracy, and sensor noise.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderConfig {
+    /// Texels per side of the unrolled-disc heightfield.
+    pub heightfield_texels: u32,
+    /// March steps of each camera ray through the elastomer shell (then bisection).
+    pub ray_steps: u32,
+    /// Standard deviation of additive sensor noise, in 8-bit grey levels (0 = none).
+    pub noise: f64,
+    /// Seed of the noise; the same seed gives the same bytes.
+    pub noise_seed: u32,
+}
+
+impl Default for RenderConfig {
+    fn default() -> Self {
+        RenderConfig {
+            heightfield_texels: 512,
+            ray_steps: 12,
+            noise: 0.0,
+            noise_seed: 0,
+        }
+    }
+}
+
 /// A sensor configuration file, as written by people and scripts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -58,6 +164,14 @@ pub struct SensorConfig {
     pub finger: FingerConfig,
     pub lens: LensConfig,
     pub image: ImageConfig,
+    #[serde(default)]
+    pub elastomer: ElastomerConfig,
+    #[serde(default)]
+    pub leds: LedsConfig,
+    #[serde(default)]
+    pub paint: PaintConfig,
+    #[serde(default)]
+    pub render: RenderConfig,
 }
 
 /// The largest image side geltip accepts (GPU texture limits start at 8192 on some devices).
@@ -182,6 +296,7 @@ impl SensorConfig {
                 ),
             ));
         }
+        self.validate_rendering()?;
         if let Some(theta) = self.lens().first_non_increasing_theta() {
             return Err(GeltipError::config(
                 "lens.k",
@@ -189,6 +304,69 @@ impl SensorConfig {
                     "the projection stops increasing at {:.2} degrees off axis, inside the field of view; it cannot be inverted",
                     theta.to_degrees()
                 ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn validate_rendering(&self) -> Result<()> {
+        let non_negative = |field: &str, v: f64| -> Result<()> {
+            if !v.is_finite() || v < 0.0 {
+                return Err(GeltipError::config(
+                    field,
+                    format!("must be a finite number >= 0, got {v}"),
+                ));
+            }
+            Ok(())
+        };
+        non_negative("elastomer.blend_mm", self.elastomer.blend_mm)?;
+        non_negative("elastomer.bulge", self.elastomer.bulge)?;
+        if self.elastomer.bulge > 1.0 {
+            return Err(GeltipError::config(
+                "elastomer.bulge",
+                format!("must be at most 1, got {}", self.elastomer.bulge),
+            ));
+        }
+        if !self.leds.z_mm.is_finite() {
+            return Err(GeltipError::config(
+                "leds.z_mm",
+                format!("must be a finite number, got {}", self.leds.z_mm),
+            ));
+        }
+        if self.leds.z_mm >= self.finger.cylinder_length_mm {
+            return Err(GeltipError::config(
+                "leds.z_mm",
+                format!(
+                    "the LEDs sit at the base, below the hemisphere (z < {}), got {}",
+                    self.finger.cylinder_length_mm, self.leds.z_mm
+                ),
+            ));
+        }
+        if !self.leds.azimuth_deg.is_finite() {
+            return Err(GeltipError::config(
+                "leds.azimuth_deg",
+                format!("must be a finite number, got {}", self.leds.azimuth_deg),
+            ));
+        }
+        non_negative("leds.intensity", self.leds.intensity)?;
+        finite_positive("leds.falloff_mm", self.leds.falloff_mm)?;
+        non_negative("leds.spread", self.leds.spread)?;
+        non_negative("leds.ambient", self.leds.ambient)?;
+        non_negative("paint.diffuse", self.paint.diffuse)?;
+        non_negative("paint.specular", self.paint.specular)?;
+        finite_positive("paint.shininess", self.paint.shininess)?;
+        non_negative("render.noise", self.render.noise)?;
+        let r = &self.render;
+        if !(16..=4096).contains(&r.heightfield_texels) {
+            return Err(GeltipError::config(
+                "render.heightfield_texels",
+                format!("must be between 16 and 4096, got {}", r.heightfield_texels),
+            ));
+        }
+        if !(1..=256).contains(&r.ray_steps) {
+            return Err(GeltipError::config(
+                "render.ray_steps",
+                format!("must be between 1 and 256, got {}", r.ray_steps),
             ));
         }
         Ok(())

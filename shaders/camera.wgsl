@@ -1,0 +1,128 @@
+//! use shared/common.wgsl
+// Stage 3, camera: each pixel's lens ray meets the deformed skin inside the shell: uniform
+// steps bracket the first point where the ray leaves the gel, bisection refines it.
+// Writes the G-buffer the LED stage shades. Mirror: src/render/camera.rs.
+
+const BISECTION_STEPS: u32 = 14u;
+
+fn height_at(c: vec2<f32>) -> f32 {
+    let taps = bilinear_taps(texel_of(disc_of(c)));
+    var v = 0.0;
+    for (var k = 0; k < 4; k++) {
+        if taps.index[k] >= 0 {
+            v += taps.weight[k] * height[taps.index[k]];
+        }
+    }
+    return v;
+}
+
+fn skin_at(u: vec2<f32>) -> vec3<f32> {
+    let c = coord_of_disc(u);
+    return surface_point(c) - height_at(c) * surface_normal(c);
+}
+
+// Outward normal of the deformed skin by central differences on the disc; where the skin is
+// untouched around the point, the exact normal.
+fn skin_normal(c: vec2<f32>) -> vec3<f32> {
+    let e = sensor.texel_mm;
+    let u = disc_of(c);
+    let n0 = surface_normal(c);
+    let ex = vec2<f32>(e, 0.0);
+    let ey = vec2<f32>(0.0, e);
+    let touched = height_at(coord_of_disc(u + ex)) != 0.0 || height_at(coord_of_disc(u - ex)) != 0.0
+        || height_at(coord_of_disc(u + ey)) != 0.0 || height_at(coord_of_disc(u - ey)) != 0.0
+        || height_at(c) != 0.0;
+    if !touched {
+        return n0;
+    }
+    let dx = skin_at(u + ex) - skin_at(u - ex);
+    let dy = skin_at(u + ey) - skin_at(u - ey);
+    let n = cross(dx, dy);
+    let len = length(n);
+    if len == 0.0 {
+        return n0;
+    }
+    if dot(n, n0) < 0.0 {
+        return -n / len;
+    }
+    return n / len;
+}
+
+// How far inside the gel the ray point at t is: positive in the gel, negative past the skin.
+fn gap(t: f32, dir: vec3<f32>) -> f32 {
+    let q = t * dir;
+    return -finger_signed_distance(q) - height_at(coord_of(q));
+}
+
+struct SkinHit {
+    point: vec3<f32>,
+    normal: vec3<f32>,
+    indentation: f32,
+    ray: vec3<f32>,
+    valid: bool,
+}
+
+fn cast_ray(px: vec2<f32>) -> SkinHit {
+    var hit: SkinHit;
+    hit.valid = false;
+    let ray = pixel_ray(px);
+    if ray.w == 0.0 {
+        return hit;
+    }
+    let dir = ray.xyz;
+    let t_in = capsule_hit(dir, -sensor.shell_thickness);
+    // Bulges rise up to half the shell thickness above the surface.
+    let t_out = capsule_hit(dir, 0.5 * sensor.shell_thickness);
+    var t_hit = capsule_hit(dir, 0.0);
+    var t_prev = t_in;
+    for (var k = 1u; k <= sensor.ray_steps; k++) {
+        let t = t_in + (t_out - t_in) * f32(k) / f32(sensor.ray_steps);
+        if gap(t, dir) < 0.0 {
+            var lo = t_prev;
+            var hi = t;
+            for (var b = 0u; b < BISECTION_STEPS; b++) {
+                let mid = 0.5 * (lo + hi);
+                if gap(mid, dir) < 0.0 { hi = mid; } else { lo = mid; }
+            }
+            t_hit = 0.5 * (lo + hi);
+            break;
+        }
+        t_prev = t;
+    }
+    hit.point = t_hit * dir;
+    let c = coord_of(hit.point);
+    hit.normal = skin_normal(c);
+    hit.indentation = height_at(c);
+    hit.ray = dir;
+    hit.valid = true;
+    return hit;
+}
+
+@compute @workgroup_size(8, 8)
+fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
+        return;
+    }
+    let x = frame.pixel_rect.x + id.x;
+    let y = frame.pixel_rect.y + id.y;
+    let i = y * sensor.image_size.x + x;
+    let hit = cast_ray(vec2<f32>(f32(x), f32(y)));
+    gbuffer[3u * i] = vec4<f32>(hit.point, hit.indentation);
+    gbuffer[3u * i + 1u] = vec4<f32>(hit.ray, select(0.0, 1.0, hit.valid));
+    gbuffer[3u * i + 2u] = vec4<f32>(hit.normal, 0.0);
+}
+
+// For tests: the undeformed surface point each listed pixel sees. Input: gbuffer[i].xy is a
+// pixel, for i < frame.pixel_rect.z; output: gbuffer[i] = (point, 1) or (0, 0, 0, 0).
+@compute @workgroup_size(64)
+fn unproject_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.pixel_rect.z {
+        return;
+    }
+    let ray = pixel_ray(gbuffer[id.x].xy);
+    if ray.w == 0.0 {
+        gbuffer[id.x] = vec4<f32>(0.0);
+        return;
+    }
+    gbuffer[id.x] = vec4<f32>(capsule_hit(ray.xyz, 0.0) * ray.xyz, 1.0);
+}

@@ -1,0 +1,82 @@
+//! use shared/common.wgsl
+//! use shared/object.wgsl
+// Stage 1, contact: penetration of the object into the skin along the surface normal, per
+// heightfield texel of the contact's footprint (frame.texel_rect). Mirror: src/render/contact.rs.
+
+const MAX_TRACE_STEPS: u32 = 48u;
+const TRACE_EPSILON_MM: f32 = 1e-3;
+
+fn grid_value(q: vec3<i32>) -> f32 {
+    let dims = vec3<i32>(i32(frame.grid_dims_x), i32(frame.grid_dims_y), i32(frame.grid_dims_z));
+    let c = clamp(q, vec3<i32>(0), dims - 1);
+    return sdf_grid[c.x + dims.x * (c.y + dims.y * c.z)];
+}
+
+// Trilinear sample of the baked SDF; outside the grid's box, max(b, edge value - b) with b
+// the distance to the box: a conservative bound. Mirror: src/object/sdf_grid.rs SdfGrid::sample.
+fn grid_sdf(p: vec3<f32>) -> f32 {
+    let voxel = frame.grid_origin.w;
+    let g = (p - frame.grid_origin.xyz) / voxel;
+    let top = vec3<f32>(f32(frame.grid_dims_x), f32(frame.grid_dims_y), f32(frame.grid_dims_z)) - 1.0;
+    let inside = clamp(g, vec3<f32>(0.0), top);
+    let b_out = length(g - inside) * voxel;
+    let base = min(floor(inside), max(top - 1.0, vec3<f32>(0.0)));
+    let f = inside - base;
+    let b = vec3<i32>(base);
+    let c00 = mix(grid_value(b), grid_value(b + vec3<i32>(1, 0, 0)), f.x);
+    let c10 = mix(grid_value(b + vec3<i32>(0, 1, 0)), grid_value(b + vec3<i32>(1, 1, 0)), f.x);
+    let c01 = mix(grid_value(b + vec3<i32>(0, 0, 1)), grid_value(b + vec3<i32>(1, 0, 1)), f.x);
+    let c11 = mix(grid_value(b + vec3<i32>(0, 1, 1)), grid_value(b + vec3<i32>(1, 1, 1)), f.x);
+    let v = mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+    if b_out > 0.0 {
+        return max(v - b_out, b_out);
+    }
+    return v;
+}
+
+fn object_sdf(p: vec3<f32>) -> f32 {
+    if frame.object_kind == GRID_OBJECT {
+        return grid_sdf(p);
+    }
+    return solid_sdf(frame.object_kind, p);
+}
+
+// Object-local coordinates of a camera-frame point.
+fn to_object(p: vec3<f32>) -> vec3<f32> {
+    let q = p - frame.origin.xyz;
+    return vec3<f32>(dot(frame.object_x.xyz, q), dot(frame.object_y.xyz, q), dot(frame.object_z.xyz, q));
+}
+
+// Largest lambda in [0, frame.origin.w] with S - lambda n inside the object: sphere tracing
+// from the deep end outwards meets the deepest object point first.
+fn penetration_at(c: vec2<f32>) -> f32 {
+    let s = surface_point(c);
+    let n = surface_normal(c);
+    var lambda = frame.origin.w;
+    for (var i = 0u; i < MAX_TRACE_STEPS; i++) {
+        let d = object_sdf(to_object(s - lambda * n));
+        if d <= TRACE_EPSILON_MM {
+            return max(lambda, 0.0);
+        }
+        lambda -= d;
+        if lambda < 0.0 {
+            return 0.0;
+        }
+    }
+    return 0.0;
+}
+
+@compute @workgroup_size(8, 8)
+fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
+        return;
+    }
+    let i = frame.texel_rect.x + id.x;
+    let j = frame.texel_rect.y + id.y;
+    let c = coord_of_disc(texel_centre(i, j));
+    var p = 0.0;
+    if c.x <= sensor.half_size_mm {
+        p = penetration_at(c);
+    }
+    penetration[j * sensor.texels + i] = p;
+}

@@ -1,0 +1,96 @@
+//! use shared/common.wgsl
+// Stage 4, LEDs: shade the G-buffer with three point lights at the finger's base (diffuse +
+// Blinn-Phong specular, fall-off, ambient), gamma-encode to RGBA8; optional seeded noise.
+// Mirror: src/render/leds.rs.
+
+// Relative emission towards unit direction `towards`: the LEDs shine up the finger (+z).
+fn emission(towards: vec3<f32>) -> f32 {
+    if sensor.spread == 0.0 {
+        return 1.0;
+    }
+    return pow(max(towards.z, 0.0), sensor.spread);
+}
+
+fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
+    // The paint faces the inside of the finger, where the camera and the LEDs are.
+    let facing = -normal;
+    let view = -ray;
+    var colour = vec3<f32>(sensor.ambient);
+    for (var i = 0; i < 3; i++) {
+        let to_led = sensor.led_position[i].xyz - p;
+        let dist = length(to_led);
+        let l = to_led / dist;
+        let lambert = dot(facing, l);
+        if lambert <= 0.0 {
+            continue;
+        }
+        let d = dist / sensor.falloff_mm;
+        let falloff = emission(-l) / (1.0 + d * d);
+        let half_vector = normalize(l + view);
+        let spec = pow(max(dot(facing, half_vector), 0.0), sensor.shininess);
+        colour += sensor.led_colour[i].xyz * (sensor.intensity * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
+    }
+    return colour;
+}
+
+fn encode(linear: f32) -> u32 {
+    let v = pow(clamp(linear, 0.0, 1.0), 1.0 / 2.2) * 255.0;
+    return u32(clamp(round(v), 0.0, 255.0));
+}
+
+fn pack_rgba(c: vec3<u32>) -> u32 {
+    return c.x | (c.y << 8u) | (c.z << 16u) | (255u << 24u);
+}
+
+@compute @workgroup_size(8, 8)
+fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
+        return;
+    }
+    let x = frame.pixel_rect.x + id.x;
+    let y = frame.pixel_rect.y + id.y;
+    let i = y * sensor.image_size.x + x;
+    let g0 = gbuffer[3u * i];
+    let g1 = gbuffer[3u * i + 1u];
+    if g1.w == 0.0 {
+        image[i] = pack_rgba(vec3<u32>(0u));
+        indentation[i] = 0.0;
+        return;
+    }
+    let colour = shade(g0.xyz, gbuffer[3u * i + 2u].xyz, g1.xyz);
+    image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
+    indentation[i] = g0.w;
+}
+
+fn pcg_hash(input: u32) -> u32 {
+    let state = input * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+fn noise_sample(x: u32, y: u32, c: u32, seed: u32) -> f32 {
+    let base = pcg_hash(x ^ pcg_hash(y ^ pcg_hash(c ^ pcg_hash(seed))));
+    let u1 = (f32(base >> 8u) + 1.0) / 16777217.0;
+    let u2 = f32(pcg_hash(base) >> 8u) / 16777216.0;
+    return sqrt(-2.0 * log(u1)) * cos(2.0 * PI * u2);
+}
+
+// Sensor noise over the whole frame (the cached reference is noise-free), on every pixel the
+// lens sees.
+@compute @workgroup_size(8, 8)
+fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= sensor.image_size.x || id.y >= sensor.image_size.y {
+        return;
+    }
+    if pixel_ray(vec2<f32>(f32(id.x), f32(id.y))).w == 0.0 {
+        return;
+    }
+    let i = id.y * sensor.image_size.x + id.x;
+    let v = image[i];
+    var out = 255u << 24u;
+    for (var c = 0u; c < 3u; c++) {
+        let level = f32((v >> (8u * c)) & 255u) + sensor.noise * noise_sample(id.x, id.y, c, frame.noise_seed);
+        out |= u32(clamp(round(level), 0.0, 255.0)) << (8u * c);
+    }
+    image[i] = out;
+}

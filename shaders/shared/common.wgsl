@@ -1,0 +1,271 @@
+// Shared by every stage of the renderer: the sensor and frame uniforms, the bindings (one
+// layout for the whole pipeline, so binding numbers live in this one place), the lens model,
+// the finger's geometry and the unrolled-disc heightfield. Mirrors: src/render/uniforms.rs
+// (structs), src/lens.rs, src/finger.rs, src/render/mod.rs (HeightfieldGrid).
+
+const PI: f32 = 3.14159265358979;
+const HALF_PI: f32 = 1.57079632679490;
+
+const LENS_PINHOLE: u32 = 0u;
+const LENS_EQUIDISTANT: u32 = 1u;
+const LENS_EQUISOLID: u32 = 2u;
+const LENS_KANNALA_BRANDT: u32 = 3u;
+
+// Per sensor: src/render/uniforms.rs SensorUniform.
+struct Sensor {
+    radius: f32,
+    cylinder_length: f32,
+    shell_thickness: f32,
+    junction_s: f32,
+    lens_model: u32,
+    focal_px: f32,
+    max_theta: f32,
+    max_rho: f32,
+    k: vec4<f32>,
+    principal: vec2<f32>,
+    image_size: vec2<u32>,
+    texels: u32,
+    ray_steps: u32,
+    half_size_mm: f32,
+    texel_mm: f32,
+    blend_mm: f32,
+    bulge: f32,
+    ambient: f32,
+    intensity: f32,
+    falloff_mm: f32,
+    diffuse: f32,
+    specular: f32,
+    shininess: f32,
+    noise: f32,
+    spread: f32,
+    _pad1: u32,
+    _pad2: u32,
+    led_position: array<vec4<f32>, 3>,
+    led_colour: array<vec4<f32>, 3>,
+}
+
+// Per frame (one contact): src/render/uniforms.rs FrameUniform.
+struct Frame {
+    // Heightfield texels the contact can touch: x, y, w, h.
+    texel_rect: vec4<u32>,
+    // Pixels whose rays can meet those texels: x, y, w, h.
+    pixel_rect: vec4<u32>,
+    // Rows of the rotation taking camera-frame vectors to object-local ones.
+    object_x: vec4<f32>,
+    object_y: vec4<f32>,
+    object_z: vec4<f32>,
+    // xyz: the object's origin (its top) in the camera frame; w: deepest trace (mm).
+    origin: vec4<f32>,
+    // 0..6: a built-in solid (shaders/shared/object.wgsl); GRID_OBJECT: the baked SDF grid.
+    object_kind: u32,
+    grid_dims_x: u32,
+    grid_dims_y: u32,
+    grid_dims_z: u32,
+    // xyz: centre of voxel 0; w: voxel size (mm).
+    grid_origin: vec4<f32>,
+    noise_seed: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+const GRID_OBJECT: u32 = 100u;
+
+@group(0) @binding(0) var<uniform> sensor: Sensor;
+@group(0) @binding(1) var<uniform> frame: Frame;
+// Stage 1 output: penetration of the object along the normal, per texel.
+@group(0) @binding(2) var<storage, read_write> penetration: array<f32>;
+// Stage 2 intermediate: (narrow, wide) blends along meridians.
+@group(0) @binding(3) var<storage, read_write> meridian: array<vec2<f32>>;
+// Stage 2 output: the skin's inward displacement, per texel.
+@group(0) @binding(4) var<storage, read_write> height: array<f32>;
+// Stage 3 output, two per pixel: (skin point, indentation), (ray direction, hit flag),
+// and the skin normal in a third.
+@group(0) @binding(5) var<storage, read_write> gbuffer: array<vec4<f32>>;
+// Stage 4 output: packed RGBA8 per pixel.
+@group(0) @binding(6) var<storage, read_write> image: array<u32>;
+// Indentation (mm) each pixel sees.
+@group(0) @binding(7) var<storage, read_write> indentation: array<f32>;
+// A loaded mesh's SDF: x fastest, then y, then z.
+@group(0) @binding(8) var<storage, read> sdf_grid: array<f32>;
+// [0]: texels pressed beyond the shell.
+@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
+
+// ---- Lens (src/lens.rs) ----
+
+fn lens_project(theta: f32) -> f32 {
+    let f = sensor.focal_px;
+    switch sensor.lens_model {
+        case LENS_PINHOLE: { return f * tan(theta); }
+        case LENS_EQUIDISTANT: { return f * theta; }
+        case LENS_EQUISOLID: { return 2.0 * f * sin(0.5 * theta); }
+        default: {
+            let t2 = theta * theta;
+            let k = sensor.k;
+            return f * theta * (1.0 + t2 * (k.x + t2 * (k.y + t2 * (k.z + t2 * k.w))));
+        }
+    }
+}
+
+fn lens_project_derivative(theta: f32) -> f32 {
+    let t2 = theta * theta;
+    let k = sensor.k;
+    return sensor.focal_px * (1.0 + t2 * (3.0 * k.x + t2 * (5.0 * k.y + t2 * (7.0 * k.z + t2 * 9.0 * k.w))));
+}
+
+// Angle off the axis of the ray landing rho px from the principal point; negative beyond
+// the lens's field of view.
+fn lens_unproject(rho: f32) -> f32 {
+    if rho > sensor.max_rho * 1.000001 {
+        return -1.0;
+    }
+    let f = sensor.focal_px;
+    switch sensor.lens_model {
+        case LENS_PINHOLE: { return min(atan(rho / f), sensor.max_theta); }
+        case LENS_EQUIDISTANT: { return min(rho / f, sensor.max_theta); }
+        case LENS_EQUISOLID: {
+            // 2 asin(x), written with atan2: some drivers' asin is far less precise.
+            let x = min(rho / (2.0 * f), 1.0);
+            return min(2.0 * atan2(x, sqrt(max(1.0 - x * x, 0.0))), sensor.max_theta);
+        }
+        default: {
+            // Safeguarded Newton: the polynomial is increasing on [0, max_theta] (validated).
+            var lo = 0.0;
+            var hi = sensor.max_theta;
+            var theta = clamp(rho / f, lo, hi);
+            for (var i = 0; i < 24; i++) {
+                let err = lens_project(theta) - rho;
+                if err > 0.0 { hi = theta; } else { lo = theta; }
+                var next = theta - err / lens_project_derivative(theta);
+                if !(next > lo && next < hi) { next = 0.5 * (lo + hi); }
+                theta = next;
+            }
+            return theta;
+        }
+    }
+}
+
+// Unit direction of the lens ray through pixel `px` (integer coordinates at pixel centres);
+// w = 0 when the pixel lies beyond the lens's field of view.
+fn pixel_ray(px: vec2<f32>) -> vec4<f32> {
+    let offset = px - sensor.principal;
+    let rho = length(offset);
+    let theta = lens_unproject(rho);
+    if theta < 0.0 {
+        return vec4<f32>(0.0);
+    }
+    if rho == 0.0 {
+        return vec4<f32>(0.0, 0.0, 1.0, 1.0);
+    }
+    let s = sin(theta);
+    return vec4<f32>(s * offset.x / rho, s * offset.y / rho, cos(theta), 1.0);
+}
+
+// ---- Finger (src/finger.rs) ----
+
+// Distance along the unit ray `dir` from the camera to the finger's surface grown by
+// `offset` mm (negative: the inner face of the shell).
+fn capsule_hit(dir: vec3<f32>, offset: f32) -> f32 {
+    let r = sensor.radius + offset;
+    let d = sensor.cylinder_length;
+    let sin_t = length(dir.xy);
+    let cos_t = dir.z;
+    if r * cos_t <= d * sin_t {
+        return r / sin_t;
+    }
+    let disc = r * r - d * d * sin_t * sin_t;
+    return d * cos_t + sqrt(max(disc, 0.0));
+}
+
+// Negative inside the finger, positive outside (exact for the convex capsule).
+fn finger_signed_distance(p: vec3<f32>) -> f32 {
+    if p.z > sensor.cylinder_length {
+        return length(p - vec3<f32>(0.0, 0.0, sensor.cylinder_length)) - sensor.radius;
+    }
+    return length(p.xy) - sensor.radius;
+}
+
+// (s, phi) of the surface point closest to p.
+fn coord_of(p: vec3<f32>) -> vec2<f32> {
+    let phi = atan2(p.y, p.x);
+    let lateral = length(p.xy);
+    if p.z > sensor.cylinder_length {
+        return vec2<f32>(sensor.radius * atan2(lateral, p.z - sensor.cylinder_length), phi);
+    }
+    return vec2<f32>(sensor.junction_s + (sensor.cylinder_length - p.z), phi);
+}
+
+// Surface point at coordinates (s, phi).
+fn surface_point(c: vec2<f32>) -> vec3<f32> {
+    let cs = cos(c.y);
+    let sn = sin(c.y);
+    if c.x <= sensor.junction_s {
+        let beta = c.x / sensor.radius;
+        let r = sensor.radius;
+        return vec3<f32>(r * sin(beta) * cs, r * sin(beta) * sn, sensor.cylinder_length + r * cos(beta));
+    }
+    return vec3<f32>(sensor.radius * cs, sensor.radius * sn, sensor.cylinder_length - (c.x - sensor.junction_s));
+}
+
+// Outward unit normal at coordinates (s, phi).
+fn surface_normal(c: vec2<f32>) -> vec3<f32> {
+    let cs = cos(c.y);
+    let sn = sin(c.y);
+    if c.x <= sensor.junction_s {
+        let beta = c.x / sensor.radius;
+        return vec3<f32>(sin(beta) * cs, sin(beta) * sn, cos(beta));
+    }
+    return vec3<f32>(cs, sn, 0.0);
+}
+
+// Radius of the parallel circle at arc length s.
+fn parallel_radius(s: f32) -> f32 {
+    if s <= sensor.junction_s {
+        return sensor.radius * sin(s / sensor.radius);
+    }
+    return sensor.radius;
+}
+
+// ---- The unrolled disc (src/render/mod.rs HeightfieldGrid) ----
+
+fn disc_of(c: vec2<f32>) -> vec2<f32> {
+    return c.x * vec2<f32>(cos(c.y), sin(c.y));
+}
+
+fn coord_of_disc(u: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(length(u), atan2(u.y, u.x));
+}
+
+fn texel_centre(i: u32, j: u32) -> vec2<f32> {
+    return (vec2<f32>(f32(i), f32(j)) + 0.5) * sensor.texel_mm - sensor.half_size_mm;
+}
+
+fn texel_of(disc: vec2<f32>) -> vec2<f32> {
+    return (disc + sensor.half_size_mm) / sensor.texel_mm;
+}
+
+// Bilinear interpolation weights and the four texel indices around continuous texel
+// coordinates t (centres at +0.5); indices outside the grid come back as -1.
+struct Taps {
+    index: vec4<i32>,
+    weight: vec4<f32>,
+}
+
+fn bilinear_taps(t: vec2<f32>) -> Taps {
+    let p = t - 0.5;
+    let base = floor(p);
+    let f = p - base;
+    let n = i32(sensor.texels);
+    var out: Taps;
+    let offsets = array<vec2<i32>, 4>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(1, 1));
+    out.weight = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+    for (var k = 0; k < 4; k++) {
+        let q = vec2<i32>(base) + offsets[k];
+        if q.x < 0 || q.y < 0 || q.x >= n || q.y >= n {
+            out.index[k] = -1;
+        } else {
+            out.index[k] = q.y * n + q.x;
+        }
+    }
+    return out;
+}

@@ -1,0 +1,136 @@
+//! Stage 3, camera: each pixel's lens ray (the same lens model as [`crate::sensor`]) crosses
+//! the transparent rigid shell and the gel, and meets the painted skin where the gel ends.
+//! The skin lies at inward depth h(s, phi) below the finger's surface; along the ray the
+//! point's own depth D(t) falls from T (inner shell) to 0 (outer surface), so the skin is the
+//! first t where D(t) - h(coord(t)) turns negative: `ray_steps` uniform steps bracket it and
+//! bisection refines it. A grazing ray simply spends its steps over a longer stretch of shell.
+//! CPU mirror of `shaders/camera.wgsl` (same names).
+
+use super::elastomer::sample_field;
+use super::HeightfieldGrid;
+use crate::finger::{Finger, SurfaceCoord};
+use crate::sensor::Sensor;
+use glam::{DVec2, DVec3};
+
+/// Bisection steps after the march has bracketed the skin.
+pub const BISECTION_STEPS: u32 = 14;
+
+/// What a pixel's ray meets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SkinHit {
+    /// The (deformed) skin point.
+    pub point: DVec3,
+    /// Outward normal of the deformed skin.
+    pub normal: DVec3,
+    /// Inward displacement of the skin there (mm).
+    pub indentation: f64,
+    /// Unit ray direction from the camera.
+    pub ray: DVec3,
+}
+
+/// Distance along `dir` to the finger's surface grown by `offset` mm (negative: the inner
+/// face of a shell `-offset` thick).
+pub fn capsule_hit(finger: &Finger, dir: DVec3, offset: f64) -> Option<f64> {
+    let grown = Finger {
+        radius: finger.radius + offset,
+        ..*finger
+    };
+    grown.ray_hit(dir).map(|(t, _)| t)
+}
+
+/// The skin's inward displacement at surface coordinates `coord`.
+pub fn height_at(grid: &HeightfieldGrid, height: &[f32], coord: SurfaceCoord) -> f64 {
+    sample_field(height, grid.texels, grid.texel_of(coord.to_disc()))
+}
+
+/// Point of the deformed skin over disc position `disc`: S(u) - h(u) n(u).
+fn skin_at(finger: &Finger, grid: &HeightfieldGrid, height: &[f32], disc: DVec2) -> DVec3 {
+    let c = SurfaceCoord::from_disc(disc);
+    let sp = finger.point_at(c);
+    sp.point - height_at(grid, height, c) * sp.normal
+}
+
+/// Outward normal of the deformed skin at `coord`, by central differences on the disc (which
+/// has no seam or pole). Where the skin is untouched around the point, the exact normal.
+pub fn skin_normal(
+    finger: &Finger,
+    grid: &HeightfieldGrid,
+    height: &[f32],
+    coord: SurfaceCoord,
+) -> DVec3 {
+    let e = grid.texel_mm();
+    let u = coord.to_disc();
+    let n0 = finger.point_at(coord).normal;
+    let offsets = [
+        DVec2::new(e, 0.0),
+        DVec2::new(-e, 0.0),
+        DVec2::new(0.0, e),
+        DVec2::new(0.0, -e),
+    ];
+    let touched = offsets
+        .iter()
+        .any(|o| height_at(grid, height, SurfaceCoord::from_disc(u + *o)) != 0.0)
+        || height_at(grid, height, coord) != 0.0;
+    if !touched {
+        return n0;
+    }
+    let dx = skin_at(finger, grid, height, u + offsets[0])
+        - skin_at(finger, grid, height, u + offsets[1]);
+    let dy = skin_at(finger, grid, height, u + offsets[2])
+        - skin_at(finger, grid, height, u + offsets[3]);
+    let n = dx.cross(dy).normalize_or_zero();
+    if n == DVec3::ZERO {
+        return n0;
+    }
+    if n.dot(n0) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// The skin point a pixel sees, or `None` outside the image or the lens's field of view.
+pub fn cast_ray(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    height: &[f32],
+    pixel: DVec2,
+    ray_steps: u32,
+) -> Option<SkinHit> {
+    let f = &sensor.finger;
+    let dir = sensor.ray_direction(pixel)?;
+    let t_in = capsule_hit(f, dir, -f.shell_thickness)?;
+    // Bulges rise up to half the shell thickness above the surface.
+    let t_out = capsule_hit(f, dir, 0.5 * f.shell_thickness)?;
+    let gap = |t: f64| {
+        let q = t * dir;
+        -f.signed_distance(q) - height_at(grid, height, f.coord_of(q))
+    };
+    let mut t_hit = capsule_hit(f, dir, 0.0)?;
+    let mut t_prev = t_in;
+    for k in 1..=ray_steps {
+        let t = t_in + (t_out - t_in) * k as f64 / ray_steps as f64;
+        if gap(t) < 0.0 {
+            let (mut lo, mut hi) = (t_prev, t);
+            for _ in 0..BISECTION_STEPS {
+                let mid = 0.5 * (lo + hi);
+                if gap(mid) < 0.0 {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            t_hit = 0.5 * (lo + hi);
+            break;
+        }
+        t_prev = t;
+    }
+    let point = t_hit * dir;
+    let coord = f.coord_of(point);
+    Some(SkinHit {
+        point,
+        normal: skin_normal(f, grid, height, coord),
+        indentation: height_at(grid, height, coord),
+        ray: dir,
+    })
+}

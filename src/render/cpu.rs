@@ -1,0 +1,96 @@
+//! The whole pipeline on the CPU, stage by stage, from the CPU mirrors: slow (seconds per
+//! frame) but independent of any GPU, so tests can hold the GPU renderer to it.
+
+use super::{camera, contact, elastomer, leds, pixel_rect, Contact, Frame, HeightfieldGrid, Rect};
+use crate::error::Result;
+use crate::sensor::Sensor;
+use glam::DVec2;
+
+/// Everything the CPU pipeline computed for one frame.
+#[derive(Debug, Clone)]
+pub struct CpuRender {
+    pub frame: Frame,
+    /// The skin's displacement on the heightfield.
+    pub height: Vec<f32>,
+    pub penetration: Vec<f32>,
+    /// Texels pressed beyond the shell.
+    pub over_pressed_texels: u32,
+    pub texel_rect: Option<Rect>,
+    pub pixel_rect: Option<Rect>,
+}
+
+/// Renders `contact` (or the empty finger) with the CPU mirrors, over the whole image.
+pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
+    let grid = HeightfieldGrid::for_sensor(sensor);
+    let n = grid.texels as usize;
+    let (mut penetration, mut height, mut over, mut texel_rect) =
+        (vec![0.0; n * n], vec![0.0; n * n], 0, None);
+    if let Some(c) = contact {
+        let pose = c.pose(sensor)?;
+        let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
+        texel_rect = contact::footprint(sensor, &grid, &pose, &c.object, reach);
+        if let Some(rect) = texel_rect {
+            penetration = contact::penetration_field(sensor, &grid, &pose, &c.object, rect);
+            let meridian = elastomer::blend_meridian(
+                &grid,
+                &penetration,
+                rect,
+                sensor.config.elastomer.blend_mm,
+            );
+            let (h, o) = elastomer::blend_azimuth(
+                &sensor.finger,
+                &grid,
+                &penetration,
+                &meridian,
+                rect,
+                &sensor.config.elastomer,
+            );
+            height = h;
+            over = o;
+        }
+    }
+    let (w, h) = (sensor.width, sensor.height);
+    let mut rgba = vec![0u8; (w * h * 4) as usize];
+    let mut indentation = vec![0.0f32; (w * h) as usize];
+    let noise = sensor.config.render.noise;
+    let seed = sensor.config.render.noise_seed;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            rgba[i * 4 + 3] = 255;
+            let Some(hit) = camera::cast_ray(
+                sensor,
+                &grid,
+                &height,
+                DVec2::new(x as f64, y as f64),
+                sensor.config.render.ray_steps,
+            ) else {
+                continue;
+            };
+            let colour = leds::shade(sensor, &hit);
+            for (ch, v) in colour.to_array().into_iter().enumerate() {
+                let level = leds::encode(v);
+                rgba[i * 4 + ch] = if noise > 0.0 {
+                    leds::add_noise(level, noise * leds::noise_sample(x, y, ch as u32, seed))
+                } else {
+                    level
+                };
+            }
+            indentation[i] = hit.indentation as f32;
+        }
+    }
+    let pixel_rect = texel_rect.and_then(|r| pixel_rect(sensor, &grid, r));
+    Ok(CpuRender {
+        frame: Frame {
+            width: w,
+            height: h,
+            rgba,
+            indentation,
+        },
+        height,
+        penetration,
+        over_pressed_texels: over,
+        texel_rect,
+        pixel_rect,
+    })
+}

@@ -1,0 +1,580 @@
+//! The GPU renderer: the four stages as compute pipelines over one bind group layout
+//! (bindings in `shaders/shared/common.wgsl`). The empty finger is rendered once; each
+//! contact copies it and re-renders only the pixels that can see the contact's footprint.
+//! Frames of a batch are recorded into one submission, each into its own slice of the
+//! output buffers, and read back together.
+
+use super::uniforms::{FrameUniform, SensorUniform};
+use super::{contact, elastomer, pixel_rect, Contact, Frame, GroundTruth, HeightfieldGrid, Rect};
+use crate::error::{GeltipError, Result};
+use crate::gpu::readback::read_buffer;
+use crate::gpu::shaders::create_compute_pipeline;
+use crate::gpu::GpuContext;
+use crate::object::Object;
+use crate::sensor::Sensor;
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use wgpu::util::DeviceExt;
+
+/// Frames recorded into one submission at most.
+pub const MAX_BATCH: usize = 8;
+
+struct Pipelines {
+    contact: wgpu::ComputePipeline,
+    blend_meridian: wgpu::ComputePipeline,
+    blend_azimuth: wgpu::ComputePipeline,
+    camera: wgpu::ComputePipeline,
+    leds: wgpu::ComputePipeline,
+    add_noise: wgpu::ComputePipeline,
+    unproject_pixels: wgpu::ComputePipeline,
+}
+
+/// What the CPU prepared for one frame of a batch.
+struct Prepared {
+    uniform: FrameUniform,
+    truth: GroundTruth,
+    texel_rect: Option<Rect>,
+    pixel_rect: Option<Rect>,
+    object: Arc<Object>,
+}
+
+/// Seconds spent in each phase of the last batch.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Timings {
+    /// CPU work before recording: poses, footprints, uniforms.
+    pub prepare: Duration,
+    /// Recording, submitting and waiting for the GPU work.
+    pub render: Duration,
+    /// Copying the frames to mappable memory, mapping and unpacking them.
+    pub readback: Duration,
+}
+
+/// A renderer for one sensor.
+pub struct Renderer {
+    ctx: &'static GpuContext,
+    sensor: Sensor,
+    grid: HeightfieldGrid,
+    pipelines: Pipelines,
+    layout: wgpu::BindGroupLayout,
+    sensor_buffer: wgpu::Buffer,
+    penetration: wgpu::Buffer,
+    meridian: wgpu::Buffer,
+    height: wgpu::Buffer,
+    gbuffer: wgpu::Buffer,
+    image: wgpu::Buffer,
+    indentation: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    reference_image: wgpu::Buffer,
+    empty_grid: wgpu::Buffer,
+    /// Baked SDF grids of loaded meshes, by object (the Arc keeps the address unique).
+    grids: HashMap<usize, (Arc<Object>, wgpu::Buffer)>,
+    /// Bytes of one frame's slice of `image` and `indentation` (256-aligned).
+    slot_bytes: u64,
+    reference: Frame,
+    seed_counter: u32,
+    timings: Timings,
+}
+
+const COUNTER_SLOT: u64 = 256;
+
+fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC
+            | extra,
+        mapped_at_creation: false,
+    })
+}
+
+fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn groups(n: u32, size: u32) -> u32 {
+    n.div_ceil(size)
+}
+
+impl Renderer {
+    /// Compiles the pipelines, allocates the buffers and renders the empty finger once.
+    pub fn new(sensor: &Sensor) -> Result<Renderer> {
+        let ctx = GpuContext::shared()?;
+        let grid = HeightfieldGrid::for_sensor(sensor);
+        let texels = grid.texels as u64 * grid.texels as u64;
+        let pixels = sensor.width as u64 * sensor.height as u64;
+        let slot_bytes = (pixels * 4).next_multiple_of(256);
+        let limits = ctx.device.limits();
+        let largest = (pixels * 48).max(slot_bytes * MAX_BATCH as u64);
+        if largest > limits.max_storage_buffer_binding_size
+            || largest > limits.max_buffer_size
+        {
+            return Err(GeltipError::input(
+                "image",
+                format!(
+                    "{}x{} needs {largest} byte GPU buffers; this device allows {}",
+                    sensor.width, sensor.height, limits.max_storage_buffer_binding_size
+                ),
+            ));
+        }
+        use wgpu::BufferBindingType::{Storage, Uniform};
+        let entries = [
+            layout_entry(0, Uniform),
+            layout_entry(1, Uniform),
+            layout_entry(2, Storage { read_only: false }),
+            layout_entry(3, Storage { read_only: false }),
+            layout_entry(4, Storage { read_only: false }),
+            layout_entry(5, Storage { read_only: false }),
+            layout_entry(6, Storage { read_only: false }),
+            layout_entry(7, Storage { read_only: false }),
+            layout_entry(8, Storage { read_only: true }),
+            layout_entry(9, Storage { read_only: false }),
+        ];
+        let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
+            let layout = ctx
+                .device
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("geltip renderer"),
+                    entries: &entries,
+                });
+            let pipeline_layout =
+                ctx.device
+                    .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("geltip renderer"),
+                        bind_group_layouts: &[Some(&layout)],
+                        immediate_size: 0,
+                    });
+            (layout, pipeline_layout)
+        })?;
+        let p = |stage: &str, entry: &str| {
+            create_compute_pipeline(ctx, stage, entry, Some(&pipeline_layout))
+        };
+        let pipelines = Pipelines {
+            contact: p("contact", "contact")?,
+            blend_meridian: p("elastomer", "blend_meridian")?,
+            blend_azimuth: p("elastomer", "blend_azimuth")?,
+            camera: p("camera", "camera")?,
+            leds: p("leds", "leds")?,
+            add_noise: p("leds", "add_noise")?,
+            unproject_pixels: p("camera", "unproject_pixels")?,
+        };
+        let sensor_uniform = SensorUniform::new(sensor, &grid);
+        let sensor_buffer = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("geltip sensor"),
+                contents: bytemuck::bytes_of(&sensor_uniform),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let none = wgpu::BufferUsages::empty();
+        let mut renderer = Renderer {
+            ctx,
+            sensor: sensor.clone(),
+            grid,
+            pipelines,
+            layout,
+            sensor_buffer,
+            penetration: storage(ctx, "geltip penetration", texels * 4, none),
+            meridian: storage(ctx, "geltip meridian", texels * 8, none),
+            height: storage(ctx, "geltip height", texels * 4, none),
+            gbuffer: storage(ctx, "geltip gbuffer", pixels * 48, none),
+            image: storage(ctx, "geltip image", slot_bytes * MAX_BATCH as u64, none),
+            indentation: storage(
+                ctx,
+                "geltip indentation",
+                slot_bytes * MAX_BATCH as u64,
+                none,
+            ),
+            counters: storage(
+                ctx,
+                "geltip counters",
+                COUNTER_SLOT * MAX_BATCH as u64,
+                none,
+            ),
+            reference_image: storage(ctx, "geltip reference", slot_bytes, none),
+            empty_grid: storage(ctx, "geltip empty grid", 16, none),
+            grids: HashMap::new(),
+            slot_bytes,
+            reference: Frame {
+                width: sensor.width,
+                height: sensor.height,
+                rgba: Vec::new(),
+                indentation: Vec::new(),
+            },
+            seed_counter: 0,
+            timings: Timings::default(),
+        };
+        renderer.render_reference()?;
+        Ok(renderer)
+    }
+
+    /// The sensor this renderer draws.
+    pub fn sensor(&self) -> &Sensor {
+        &self.sensor
+    }
+
+    /// The heightfield grid.
+    pub fn grid(&self) -> &HeightfieldGrid {
+        &self.grid
+    }
+
+    /// The empty finger (noise-free), as rendered once at start-up.
+    pub fn reference(&self) -> &Frame {
+        &self.reference
+    }
+
+    /// Timings of the last call to [`Renderer::render_batch`] (or the reference).
+    pub fn timings(&self) -> Timings {
+        self.timings
+    }
+
+    /// The adapter in use, for logs and benchmarks.
+    pub fn adapter(&self) -> &wgpu::AdapterInfo {
+        &self.ctx.adapter_info
+    }
+
+    fn bind_group(
+        &self,
+        uniform: &wgpu::Buffer,
+        slot: u64,
+        object: Option<&Object>,
+    ) -> wgpu::BindGroup {
+        let grid = match object {
+            Some(o @ Object::Mesh { .. }) => &self.grids[&(o as *const Object as usize)].1,
+            _ => &self.empty_grid,
+        };
+        fn slice(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource<'_> {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset,
+                size: std::num::NonZeroU64::new(size),
+            })
+        }
+        fn whole(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+            b.as_entire_binding()
+        }
+        let resources = [
+            whole(&self.sensor_buffer),
+            whole(uniform),
+            whole(&self.penetration),
+            whole(&self.meridian),
+            whole(&self.height),
+            whole(&self.gbuffer),
+            slice(&self.image, slot * self.slot_bytes, self.slot_bytes),
+            slice(&self.indentation, slot * self.slot_bytes, self.slot_bytes),
+            whole(grid),
+            slice(&self.counters, slot * COUNTER_SLOT, COUNTER_SLOT),
+        ];
+        let entries: Vec<wgpu::BindGroupEntry> = resources
+            .into_iter()
+            .enumerate()
+            .map(|(i, resource)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource,
+            })
+            .collect();
+        self.ctx
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("geltip frame"),
+                layout: &self.layout,
+                entries: &entries,
+            })
+    }
+
+    fn uniform_buffer(&self, u: &FrameUniform) -> wgpu::Buffer {
+        self.ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("geltip frame uniform"),
+                contents: bytemuck::bytes_of(u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+    }
+
+    fn dispatch(
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        groups: (u32, u32),
+    ) {
+        if groups.0 == 0 || groups.1 == 0 {
+            return;
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: None,
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+    }
+
+    fn clear_heightfield(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.clear_buffer(&self.penetration, 0, None);
+        encoder.clear_buffer(&self.meridian, 0, None);
+        encoder.clear_buffer(&self.height, 0, None);
+    }
+
+    /// Renders the empty finger again, every pixel (the renderer does this once at start-up;
+    /// public for benchmarks).
+    pub fn render_reference(&mut self) -> Result<()> {
+        let start = Instant::now();
+        let uniform = self.uniform_buffer(&FrameUniform::reference(&self.sensor, 0));
+        let bind = self.bind_group(&uniform, 0, None);
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        self.clear_heightfield(&mut encoder);
+        let (w, h) = (self.sensor.width, self.sensor.height);
+        Self::dispatch(
+            &mut encoder,
+            &self.pipelines.camera,
+            &bind,
+            (groups(w, 8), groups(h, 8)),
+        );
+        Self::dispatch(
+            &mut encoder,
+            &self.pipelines.leds,
+            &bind,
+            (groups(w, 8), groups(h, 8)),
+        );
+        encoder.copy_buffer_to_buffer(
+            &self.image,
+            0,
+            &self.reference_image,
+            0,
+            Some(self.slot_bytes),
+        );
+        self.ctx
+            .submit_and_wait("rendering the reference frame", encoder)?;
+        let render = start.elapsed();
+        let pixels = (w * h) as usize;
+        let packed: Vec<u32> = read_buffer(self.ctx, &self.reference_image, 0, pixels)?;
+        self.reference.rgba = bytemuck::cast_slice(&packed).to_vec();
+        self.reference.indentation = vec![0.0; pixels];
+        self.timings = Timings {
+            prepare: Duration::ZERO,
+            render,
+            readback: start.elapsed() - render,
+        };
+        Ok(())
+    }
+
+    fn prepare(&mut self, contact: &Contact, noise_seed: u32) -> Result<Prepared> {
+        let sensor = &self.sensor;
+        let pose = contact.pose(sensor)?;
+        let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
+        let texel_rect = contact::footprint(sensor, &self.grid, &pose, &contact.object, reach);
+        let pixel_rect = texel_rect.and_then(|r| pixel_rect(sensor, &self.grid, r));
+        let max_depth = contact::max_trace_depth(&sensor.finger, pose.depth_mm);
+        if let Object::Mesh { grid, .. } = contact.object.as_ref() {
+            let key = Arc::as_ptr(&contact.object) as usize;
+            if !self.grids.contains_key(&key) {
+                let buffer =
+                    self.ctx
+                        .device
+                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some("geltip sdf grid"),
+                            contents: bytemuck::cast_slice(&grid.values),
+                            usage: wgpu::BufferUsages::STORAGE,
+                        });
+                self.grids.insert(key, (contact.object.clone(), buffer));
+            }
+        }
+        let uniform = FrameUniform::contact(
+            &pose,
+            &contact.object,
+            max_depth,
+            texel_rect,
+            pixel_rect,
+            noise_seed,
+        );
+        let f = &sensor.finger;
+        let truth = GroundTruth {
+            object: contact.object.name().to_string(),
+            place: contact.place.label(),
+            point: pose.point,
+            pixel: sensor.project(pose.point).map_err(|why| why.to_string()),
+            normal: pose.normal,
+            depth_mm: contact.depth_mm,
+            region: pose.region,
+            s_mm: pose.coord.s,
+            azimuth_deg: contact.azimuth_deg,
+            spin_deg: contact.spin_deg,
+            mask_pixels: 0,
+            mask_bbox: None,
+            over_pressed: false,
+            max_penetration_mm: contact::penetration(
+                f,
+                &pose,
+                &contact.object,
+                pose.coord,
+                max_depth,
+                contact::TRACE_EPSILON_MM,
+            ),
+        };
+        Ok(Prepared {
+            uniform,
+            truth,
+            texel_rect,
+            pixel_rect,
+            object: contact.object.clone(),
+        })
+    }
+
+    /// Renders one contact.
+    pub fn render(&mut self, contact: &Contact) -> Result<(Frame, GroundTruth)> {
+        let mut out = self.render_batch(std::slice::from_ref(contact))?;
+        Ok(out.remove(0))
+    }
+
+    /// Renders contacts in batches of up to [`MAX_BATCH`] per submission.
+    pub fn render_batch(&mut self, contacts: &[Contact]) -> Result<Vec<(Frame, GroundTruth)>> {
+        let mut out = Vec::with_capacity(contacts.len());
+        let mut total = Timings::default();
+        for chunk in contacts.chunks(MAX_BATCH) {
+            let start = Instant::now();
+            let mut prepared = Vec::with_capacity(chunk.len());
+            for c in chunk {
+                self.seed_counter = self.seed_counter.wrapping_add(1);
+                let seed = self.sensor.config.render.noise_seed
+                    ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
+                prepared.push(self.prepare(c, seed)?);
+            }
+            total.prepare += start.elapsed();
+            let frames = self.run(&prepared, &mut total)?;
+            for ((frame, over_pressed_texels), p) in frames.into_iter().zip(prepared) {
+                let mut truth = p.truth;
+                let (count, bbox) = frame.mask();
+                truth.mask_pixels = count;
+                truth.mask_bbox = bbox;
+                truth.over_pressed = over_pressed_texels > 0;
+                out.push((frame, truth));
+            }
+        }
+        self.timings = total;
+        Ok(out)
+    }
+
+    /// Records and runs the prepared frames; returns each frame and its over-pressed texels.
+    fn run(&mut self, prepared: &[Prepared], timings: &mut Timings) -> Result<Vec<(Frame, u32)>> {
+        let start = Instant::now();
+        let (w, h) = (self.sensor.width, self.sensor.height);
+        let uniforms: Vec<wgpu::Buffer> = prepared
+            .iter()
+            .map(|p| self.uniform_buffer(&p.uniform))
+            .collect();
+        let binds: Vec<wgpu::BindGroup> = prepared
+            .iter()
+            .zip(&uniforms)
+            .enumerate()
+            .map(|(slot, (p, u))| self.bind_group(u, slot as u64, Some(&p.object)))
+            .collect();
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
+            let offset = slot as u64 * self.slot_bytes;
+            encoder.copy_buffer_to_buffer(
+                &self.reference_image,
+                0,
+                &self.image,
+                offset,
+                Some(self.slot_bytes),
+            );
+            encoder.clear_buffer(&self.indentation, offset, Some(self.slot_bytes));
+            encoder.clear_buffer(
+                &self.counters,
+                slot as u64 * COUNTER_SLOT,
+                Some(COUNTER_SLOT),
+            );
+            if let Some(t) = p.texel_rect {
+                self.clear_heightfield(&mut encoder);
+                let g = (groups(t.w, 8), groups(t.h, 8));
+                Self::dispatch(&mut encoder, &self.pipelines.contact, bind, g);
+                Self::dispatch(&mut encoder, &self.pipelines.blend_meridian, bind, g);
+                Self::dispatch(&mut encoder, &self.pipelines.blend_azimuth, bind, g);
+            }
+            if let Some(r) = p.pixel_rect {
+                let g = (groups(r.w, 8), groups(r.h, 8));
+                Self::dispatch(&mut encoder, &self.pipelines.camera, bind, g);
+                Self::dispatch(&mut encoder, &self.pipelines.leds, bind, g);
+            }
+            if self.sensor.config.render.noise > 0.0 {
+                Self::dispatch(
+                    &mut encoder,
+                    &self.pipelines.add_noise,
+                    bind,
+                    (groups(w, 8), groups(h, 8)),
+                );
+            }
+        }
+        self.ctx.submit_and_wait("rendering contacts", encoder)?;
+        let rendered = Instant::now();
+        timings.render += rendered - start;
+        let n = prepared.len();
+        let pixels = (w * h) as usize;
+        let words = self.slot_bytes as usize / 4;
+        let images: Vec<u32> = read_buffer(self.ctx, &self.image, 0, words * n)?;
+        let depths: Vec<f32> = read_buffer(self.ctx, &self.indentation, 0, words * n)?;
+        let counters: Vec<u32> =
+            read_buffer(self.ctx, &self.counters, 0, (COUNTER_SLOT as usize / 4) * n)?;
+        let frames = (0..n)
+            .map(|k| {
+                let frame = Frame {
+                    width: w,
+                    height: h,
+                    rgba: bytemuck::cast_slice(&images[k * words..k * words + pixels]).to_vec(),
+                    indentation: depths[k * words..k * words + pixels].to_vec(),
+                };
+                (frame, counters[k * COUNTER_SLOT as usize / 4])
+            })
+            .collect();
+        timings.readback += rendered.elapsed();
+        Ok(frames)
+    }
+
+    /// The undeformed surface points the GPU's lens rays meet for `pixels` (None beyond the
+    /// lens): the GPU half of the CPU/GPU projection comparison.
+    pub fn unproject_pixels(&mut self, pixels: &[glam::DVec2]) -> Result<Vec<Option<glam::DVec3>>> {
+        let max = (self.sensor.width as usize * self.sensor.height as usize) * 3;
+        if pixels.len() > max {
+            return Err(GeltipError::input(
+                "unproject_pixels",
+                format!("at most {max} pixels at once"),
+            ));
+        }
+        let input: Vec<[f32; 4]> = pixels
+            .iter()
+            .map(|p| [p.x as f32, p.y as f32, 0.0, 0.0])
+            .collect();
+        self.ctx
+            .queue
+            .write_buffer(&self.gbuffer, 0, bytemuck::cast_slice(&input));
+        let mut uniform = FrameUniform::reference(&self.sensor, 0);
+        uniform.pixel_rect = [0, 0, pixels.len() as u32, 1];
+        let ub = self.uniform_buffer(&uniform);
+        let bind = self.bind_group(&ub, 0, None);
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        Self::dispatch(
+            &mut encoder,
+            &self.pipelines.unproject_pixels,
+            &bind,
+            (groups(pixels.len() as u32, 64), 1),
+        );
+        self.ctx.submit_and_wait("unprojecting pixels", encoder)?;
+        let out: Vec<[f32; 4]> = read_buffer(self.ctx, &self.gbuffer, 0, pixels.len())?;
+        Ok(out
+            .into_iter()
+            .map(|v| (v[3] != 0.0).then(|| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)))
+            .collect())
+    }
+}

@@ -1,0 +1,176 @@
+//! Structs shared with WGSL (`shaders/shared/common.wgsl`): explicitly padded `#[repr(C)]`
+//! Pod types whose sizes are asserted here and whose layout a test checks against naga's.
+
+use super::{leds, ContactPose, HeightfieldGrid, Rect};
+use crate::object::Object;
+use crate::sensor::Sensor;
+use bytemuck::{Pod, Zeroable};
+
+/// WGSL `Sensor`: everything about the sensor that every stage reads.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct SensorUniform {
+    pub radius: f32,
+    pub cylinder_length: f32,
+    pub shell_thickness: f32,
+    pub junction_s: f32,
+    pub lens_model: u32,
+    pub focal_px: f32,
+    pub max_theta: f32,
+    pub max_rho: f32,
+    pub k: [f32; 4],
+    pub principal: [f32; 2],
+    pub image_size: [u32; 2],
+    pub texels: u32,
+    pub ray_steps: u32,
+    pub half_size_mm: f32,
+    pub texel_mm: f32,
+    pub blend_mm: f32,
+    pub bulge: f32,
+    pub ambient: f32,
+    pub intensity: f32,
+    pub falloff_mm: f32,
+    pub diffuse: f32,
+    pub specular: f32,
+    pub shininess: f32,
+    pub noise: f32,
+    pub spread: f32,
+    pub _pad: [u32; 2],
+    pub led_position: [[f32; 4]; 3],
+    pub led_colour: [[f32; 4]; 3],
+}
+
+const _: () = assert!(std::mem::size_of::<SensorUniform>() == 224);
+
+/// WGSL `Frame`: one contact.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct FrameUniform {
+    pub texel_rect: [u32; 4],
+    pub pixel_rect: [u32; 4],
+    pub object_x: [f32; 4],
+    pub object_y: [f32; 4],
+    pub object_z: [f32; 4],
+    pub origin: [f32; 4],
+    pub object_kind: u32,
+    pub grid_dims: [u32; 3],
+    pub grid_origin: [f32; 4],
+    pub noise_seed: u32,
+    pub _pad: [u32; 3],
+}
+
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 144);
+
+/// `object_kind` of a loaded mesh's baked SDF grid (WGSL `GRID_OBJECT`).
+pub const GRID_OBJECT: u32 = 100;
+
+fn rect4(r: Option<Rect>) -> [u32; 4] {
+    r.map(|r| [r.x, r.y, r.w, r.h]).unwrap_or([0; 4])
+}
+
+impl SensorUniform {
+    pub fn new(sensor: &Sensor, grid: &HeightfieldGrid) -> Self {
+        let c = &sensor.config;
+        let lights = leds::leds(sensor);
+        let f = &sensor.finger;
+        SensorUniform {
+            radius: f.radius as f32,
+            cylinder_length: f.cylinder_length as f32,
+            shell_thickness: f.shell_thickness as f32,
+            junction_s: f.junction_s() as f32,
+            lens_model: match sensor.lens.model {
+                crate::LensModel::Pinhole => 0,
+                crate::LensModel::Equidistant => 1,
+                crate::LensModel::Equisolid => 2,
+                crate::LensModel::KannalaBrandt => 3,
+            },
+            focal_px: sensor.lens.focal_px as f32,
+            max_theta: sensor.lens.max_theta as f32,
+            max_rho: sensor.lens.max_rho() as f32,
+            k: sensor.lens.k.map(|k| k as f32),
+            principal: [sensor.principal.x as f32, sensor.principal.y as f32],
+            image_size: [sensor.width, sensor.height],
+            texels: grid.texels,
+            ray_steps: c.render.ray_steps,
+            half_size_mm: grid.half_size_mm as f32,
+            texel_mm: grid.texel_mm() as f32,
+            blend_mm: c.elastomer.blend_mm as f32,
+            bulge: c.elastomer.bulge as f32,
+            ambient: c.leds.ambient as f32,
+            intensity: c.leds.intensity as f32,
+            falloff_mm: c.leds.falloff_mm as f32,
+            diffuse: c.paint.diffuse as f32,
+            specular: c.paint.specular as f32,
+            shininess: c.paint.shininess as f32,
+            noise: c.render.noise as f32,
+            spread: c.leds.spread as f32,
+            _pad: [0; 2],
+            led_position: lights.map(|l| {
+                [
+                    l.position.x as f32,
+                    l.position.y as f32,
+                    l.position.z as f32,
+                    0.0,
+                ]
+            }),
+            led_colour: lights
+                .map(|l| [l.colour.x as f32, l.colour.y as f32, l.colour.z as f32, 0.0]),
+        }
+    }
+}
+
+impl FrameUniform {
+    /// The reference frame: no contact, every pixel.
+    pub fn reference(sensor: &Sensor, noise_seed: u32) -> Self {
+        FrameUniform {
+            pixel_rect: [0, 0, sensor.width, sensor.height],
+            noise_seed,
+            ..Zeroable::zeroed()
+        }
+    }
+
+    /// A contact over `texel_rect`, re-rendering `pixel_rect`.
+    pub fn contact(
+        pose: &ContactPose,
+        object: &Object,
+        max_trace_depth: f64,
+        texel_rect: Option<Rect>,
+        pixel_rect: Option<Rect>,
+        noise_seed: u32,
+    ) -> Self {
+        // Rows of object_from_world = columns of world_from_object.
+        let m = pose.world_from_object;
+        let row = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
+        let (kind, dims, grid_origin) = match object {
+            Object::Solid(s) => (s.id(), [0; 3], [0.0; 4]),
+            Object::Mesh { grid, .. } => (
+                GRID_OBJECT,
+                grid.dims,
+                [
+                    grid.origin.x as f32,
+                    grid.origin.y as f32,
+                    grid.origin.z as f32,
+                    grid.voxel_mm as f32,
+                ],
+            ),
+        };
+        FrameUniform {
+            texel_rect: rect4(texel_rect),
+            pixel_rect: rect4(pixel_rect),
+            object_x: row(m.x_axis),
+            object_y: row(m.y_axis),
+            object_z: row(m.z_axis),
+            origin: [
+                pose.origin.x as f32,
+                pose.origin.y as f32,
+                pose.origin.z as f32,
+                max_trace_depth as f32,
+            ],
+            object_kind: kind,
+            grid_dims: dims,
+            grid_origin,
+            noise_seed,
+            _pad: [0; 3],
+        }
+    }
+}

@@ -1,0 +1,394 @@
+//! The GPU renderer on lavapipe: its lens rays against the CPU projection map, its images
+//! against committed references (with a tolerance that a perturbed image fails), against the
+//! CPU mirrors of its stages, and its ground truth, monotonicity and determinism.
+//!
+//! Reference images live in tests/reference/; `GELTIP_BLESS=1 cargo test --test render`
+//! rewrites them (then look at them before committing).
+
+mod common;
+
+use geltip::object::{Object, Solid};
+use geltip::render::cpu;
+use geltip::render::gpu::Renderer;
+use geltip::render::{Contact, Frame, Place};
+use geltip::sensor::Sensor;
+use glam::DVec2;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// One renderer for the paper's sensor, shared by the tests of this file.
+fn paper() -> std::sync::MutexGuard<'static, Renderer> {
+    static R: OnceLock<Mutex<Renderer>> = OnceLock::new();
+    R.get_or_init(|| {
+        Mutex::new(
+            Renderer::new(&Sensor::preset("paper").unwrap())
+                .expect("renderer (is lavapipe installed?)"),
+        )
+    })
+    .lock()
+    .unwrap_or_else(|e| e.into_inner())
+}
+
+fn contact(solid: Solid, place: Place, depth: f64) -> Contact {
+    Contact {
+        object: Arc::new(Object::Solid(solid)),
+        place,
+        azimuth_deg: 30.0,
+        spin_deg: 0.0,
+        depth_mm: depth,
+    }
+}
+
+/// A small sensor for CPU-vs-GPU comparisons (the CPU mirror is slow at full size).
+fn small_sensor() -> Sensor {
+    let mut c = common::paper_config();
+    c.image.width = 160;
+    c.image.height = 120;
+    c.lens.cx = 80.0;
+    c.lens.cy = 60.0;
+    c.lens.focal_px = 45.0;
+    c.render.heightfield_texels = 256;
+    Sensor::from_config("small", c).unwrap()
+}
+
+/// Per-channel differences between two images.
+#[derive(Debug)]
+struct Diff {
+    mean_abs: f64,
+    /// Fraction of channel values that differ by more than `loose` levels.
+    frac_over: f64,
+    max_abs: u8,
+}
+
+fn diff(a: &[u8], b: &[u8], loose: u8) -> Diff {
+    assert_eq!(a.len(), b.len());
+    let (mut sum, mut over, mut max) = (0u64, 0u64, 0u8);
+    for (x, y) in a.iter().zip(b) {
+        let d = x.abs_diff(*y);
+        sum += d as u64;
+        max = max.max(d);
+        if d > loose {
+            over += 1;
+        }
+    }
+    Diff {
+        mean_abs: sum as f64 / a.len() as f64,
+        frac_over: over as f64 / a.len() as f64,
+        max_abs: max,
+    }
+}
+
+/// The tolerance every image comparison uses: small rounding differences everywhere are fine,
+/// a changed region is not.
+fn close_enough(d: &Diff) -> bool {
+    d.mean_abs < 0.5 && d.frac_over < 0.002
+}
+
+fn reference_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/reference")
+        .join(name)
+}
+
+fn rgb(frame: &Frame) -> Vec<u8> {
+    frame.to_rgb().into_raw()
+}
+
+/// Compares with a committed PNG (or writes it when blessing); returns the committed image.
+fn check_against_reference(name: &str, frame: &Frame) -> Vec<u8> {
+    let path = reference_path(name);
+    if std::env::var_os("GELTIP_BLESS").is_some() {
+        frame.to_rgb().save(&path).unwrap();
+    }
+    let expected = image::open(&path)
+        .unwrap_or_else(|e| panic!("{}: {e} (GELTIP_BLESS=1 writes it)", path.display()))
+        .to_rgb8();
+    assert_eq!(
+        (expected.width(), expected.height()),
+        (frame.width, frame.height)
+    );
+    let d = diff(&rgb(frame), expected.as_raw(), 3);
+    assert!(close_enough(&d), "{name}: {d:?}");
+    expected.into_raw()
+}
+
+/// Perturbations a real regression could cause; each must fail the tolerance.
+fn assert_perturbations_fail(name: &str, image: &[u8], width: u32, around: DVec2) {
+    let (cx, cy) = (around.x as i64, around.y as i64);
+    let mut brighter_patch = image.to_vec();
+    let mut shifted = image.to_vec();
+    let mut swapped = image.to_vec();
+    for y in 0..(image.len() as i64 / 3 / width as i64) {
+        for x in 0..width as i64 {
+            let i = ((y * width as i64 + x) * 3) as usize;
+            if (x - cx).abs() < 20 && (y - cy).abs() < 20 {
+                for c in 0..3 {
+                    brighter_patch[i + c] = brighter_patch[i + c].saturating_add(40);
+                }
+            }
+            if x >= 2 {
+                let j = ((y * width as i64 + x - 2) * 3) as usize;
+                shifted[i..i + 3].copy_from_slice(&image[j..j + 3]);
+            }
+            swapped.swap(i, i + 2);
+        }
+    }
+    for (what, p) in [
+        ("brighter 40x40 patch", &brighter_patch),
+        ("2 px shift", &shifted),
+        ("red/blue swap", &swapped),
+    ] {
+        let d = diff(image, p, 3);
+        assert!(
+            !close_enough(&d),
+            "{name}: a {what} passes the tolerance: {d:?}"
+        );
+    }
+}
+
+#[test]
+fn gpu_lens_rays_agree_with_the_cpu_map() {
+    for sensor in common::all_sensors() {
+        let mut r = Renderer::new(&sensor).unwrap();
+        let mut pixels = Vec::new();
+        for v in (0..sensor.height).step_by(7) {
+            for u in (0..sensor.width).step_by(7) {
+                pixels.push(DVec2::new(u as f64 + 0.25, v as f64 + 0.5));
+            }
+        }
+        // The centre, the junction ring and the lens edge on purpose.
+        let rho_j = sensor.lens.project(sensor.finger.junction_theta());
+        let rho_e = sensor.lens.max_rho();
+        for rho in [0.0, rho_j - 1e-3, rho_j + 1e-3, rho_e * (1.0 - 1e-5)] {
+            let px = sensor.principal + DVec2::new(rho, 0.0);
+            if sensor.in_image(px) {
+                pixels.push(px);
+            }
+        }
+        let gpu = r.unproject_pixels(&pixels).unwrap();
+        let (mut worst, mut compared) = (0.0f64, 0);
+        for (px, g) in pixels.iter().zip(&gpu) {
+            let c = sensor.unproject(*px);
+            match (c, g) {
+                (Some(c), Some(g)) => {
+                    worst = worst.max((c.point - *g).length());
+                    compared += 1;
+                }
+                (None, None) => {}
+                // Pixels within a hair of the lens edge may fall either side in f32.
+                (c, g) => {
+                    let rho = (*px - sensor.principal).length();
+                    assert!(
+                        (rho / rho_e - 1.0).abs() < 1e-5,
+                        "{}: {px}: cpu {c:?} gpu {g:?}",
+                        sensor.name
+                    );
+                }
+            }
+        }
+        assert!(
+            compared > 500,
+            "{}: only {compared} pixels compared",
+            sensor.name
+        );
+        assert!(
+            worst < 1e-3,
+            "{}: GPU and CPU disagree by {worst} mm",
+            sensor.name
+        );
+    }
+}
+
+#[test]
+fn reference_frame_matches_committed_image() {
+    let r = paper();
+    let committed = check_against_reference("paper_reference.png", r.reference());
+    let s = r.sensor();
+    assert_perturbations_fail(
+        "paper_reference.png",
+        &committed,
+        s.width,
+        s.principal + DVec2::new(60.0, 20.0),
+    );
+}
+
+#[test]
+fn contact_frame_matches_committed_image() {
+    let mut r = paper();
+    let (frame, truth) = r
+        .render(&contact(Solid::Sphere, Place::Rotation(45.0), 1.0))
+        .unwrap();
+    let committed = check_against_reference("paper_sphere_rot45.png", &frame);
+    let px = truth.pixel.unwrap();
+    assert_perturbations_fail("paper_sphere_rot45.png", &committed, frame.width, px);
+}
+
+#[test]
+fn gpu_matches_the_cpu_pipeline() {
+    let sensor = small_sensor();
+    let mut r = Renderer::new(&sensor).unwrap();
+    let reference = cpu::render(&sensor, None).unwrap();
+    let d = diff(&rgb(r.reference()), &rgb(&reference.frame), 3);
+    assert!(close_enough(&d), "reference: {d:?}");
+    for (solid, place) in [
+        (Solid::Sphere, Place::Rotation(0.0)),
+        (Solid::Cone, Place::Rotation(60.0)),
+        (Solid::Slab, Place::Translation(5.0)),
+        (Solid::Edge, Place::Rotation(90.0)),
+    ] {
+        let c = contact(solid, place, 1.0);
+        let (gpu, _) = r.render(&c).unwrap();
+        let cpu = cpu::render(&sensor, Some(&c)).unwrap();
+        let d = diff(&rgb(&gpu), &rgb(&cpu.frame), 3);
+        assert!(close_enough(&d), "{solid:?} at {place:?}: {d:?}");
+        let worst = gpu
+            .indentation
+            .iter()
+            .zip(&cpu.frame.indentation)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 0.05, "{solid:?}: indentation differs by {worst} mm");
+        // The CPU pipeline must see a real imprint, or this comparison proves nothing.
+        assert!(
+            cpu.frame.indentation.iter().any(|&d| d > 0.2),
+            "{solid:?}: no imprint"
+        );
+    }
+}
+
+#[test]
+fn contact_region_contains_the_true_pixel() {
+    let mut r = paper();
+    for (solid, place) in [
+        (Solid::Cone, Place::Rotation(0.0)),
+        (Solid::Sphere, Place::Rotation(30.0)),
+        (Solid::Cylinder, Place::Rotation(90.0)),
+        (Solid::Tube, Place::Translation(10.0)),
+        (Solid::IrregularPrism, Place::Translation(15.0)),
+    ] {
+        let (frame, truth) = r.render(&contact(solid, place, 1.0)).unwrap();
+        let px = truth
+            .pixel
+            .clone()
+            .unwrap_or_else(|e| panic!("{solid:?}: truth not visible: {e}"));
+        let [u0, v0, u1, v1] = truth
+            .mask_bbox
+            .unwrap_or_else(|| panic!("{solid:?} at {place:?}: empty mask"));
+        assert!(
+            px.x >= u0 as f64 - 0.5
+                && px.x <= u1 as f64 + 0.5
+                && px.y >= v0 as f64 - 0.5
+                && px.y <= v1 as f64 + 0.5,
+            "{solid:?} at {place:?}: truth pixel {px} outside mask {:?}",
+            truth.mask_bbox
+        );
+        // The tube touches in a ring: its centre is not pressed.
+        if solid != Solid::Tube {
+            let (u, v) = (px.x.round() as u32, px.y.round() as u32);
+            let d = frame.indentation[(v * frame.width + u) as usize];
+            assert!(
+                d > 0.1,
+                "{solid:?} at {place:?}: indentation {d} at the truth pixel"
+            );
+        }
+        let changed = diff(&rgb(&frame), &rgb(r.reference()), 0);
+        assert!(changed.frac_over > 0.0);
+        assert!(!truth.over_pressed);
+    }
+}
+
+#[test]
+fn deeper_press_changes_the_image_more() {
+    let mut r = paper();
+    let reference = rgb(r.reference());
+    let mut last = 0.0;
+    for depth in [0.1, 0.3, 0.6, 1.0, 1.4] {
+        let (frame, _) = r
+            .render(&contact(Solid::Sphere, Place::Translation(5.0), depth))
+            .unwrap();
+        let total: u64 = rgb(&frame)
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| a.abs_diff(*b) as u64)
+            .sum();
+        let total = total as f64;
+        assert!(
+            total > last,
+            "depth {depth}: difference {total} not above {last}"
+        );
+        last = total;
+    }
+}
+
+#[test]
+fn over_pressing_is_reported() {
+    let mut r = paper();
+    let (_, truth) = r
+        .render(&contact(Solid::Sphere, Place::Rotation(30.0), 2.5))
+        .unwrap();
+    assert!(truth.over_pressed, "2.5 mm into a 1.5 mm shell: {truth:?}");
+}
+
+#[test]
+fn same_inputs_give_identical_bytes() {
+    let mut r = paper();
+    let c = contact(Solid::Edge, Place::Rotation(60.0), 0.8);
+    let (a, ta) = r.render(&c).unwrap();
+    let batch = r
+        .render_batch(&[
+            c.clone(),
+            contact(Solid::Cone, Place::Rotation(0.0), 1.0),
+            c.clone(),
+        ])
+        .unwrap();
+    assert_eq!(a.rgba, batch[0].0.rgba);
+    assert_eq!(a.rgba, batch[2].0.rgba);
+    assert_ne!(a.rgba, batch[1].0.rgba);
+    assert_eq!(ta, batch[0].1);
+    let fresh = Renderer::new(r.sensor()).unwrap();
+    assert_eq!(fresh.reference().rgba, r.reference().rgba);
+}
+
+#[test]
+fn noise_is_seeded() {
+    let mut c = common::paper_config();
+    c.render.noise = 2.0;
+    c.render.noise_seed = 7;
+    let sensor = Sensor::from_config("noisy", c).unwrap();
+    let contact = contact(Solid::Sphere, Place::Rotation(0.0), 0.5);
+    let mut a = Renderer::new(&sensor).unwrap();
+    let mut b = Renderer::new(&sensor).unwrap();
+    let (fa, _) = a.render(&contact).unwrap();
+    let (fb, _) = b.render(&contact).unwrap();
+    assert_eq!(fa.rgba, fb.rgba, "same seed, same bytes");
+    let (fa2, _) = a.render(&contact).unwrap();
+    assert_ne!(fa.rgba, fa2.rgba, "each frame draws fresh noise");
+    let d = diff(&rgb(&fa), &rgb(a.reference()), 0);
+    assert!(
+        d.mean_abs > 0.5 && d.mean_abs < 3.0,
+        "noise of 2 levels: {d:?}"
+    );
+}
+
+#[test]
+fn bad_contacts_are_refused() {
+    let mut r = paper();
+    for (c, what) in [
+        (
+            contact(Solid::Sphere, Place::Rotation(0.0), -1.0),
+            "--depth",
+        ),
+        (
+            contact(Solid::Sphere, Place::Rotation(0.0), f64::NAN),
+            "--depth",
+        ),
+        (
+            contact(Solid::Sphere, Place::Translation(40.0), 1.0),
+            "--at",
+        ),
+        (contact(Solid::Sphere, Place::Rotation(-5.0), 1.0), "--at"),
+    ] {
+        let err = r.render(&c).unwrap_err().to_string();
+        assert!(err.contains(what), "{err}");
+    }
+}
