@@ -21,29 +21,51 @@ fn skin_at(u: vec2<f32>) -> vec3<f32> {
     return surface_point(c) - height_at(c) * surface_normal(c);
 }
 
-// Outward normal of the deformed skin by central differences on the disc; where the skin is
-// untouched around the point, the exact normal.
-fn skin_normal(c: vec2<f32>) -> vec3<f32> {
-    let e = sensor.texel_mm;
-    let u = disc_of(c);
-    let n0 = surface_normal(c);
-    let ex = vec2<f32>(e, 0.0);
-    let ey = vec2<f32>(0.0, e);
-    let touched = height_at(coord_of_disc(u + ex)) != 0.0 || height_at(coord_of_disc(u - ex)) != 0.0
-        || height_at(coord_of_disc(u + ey)) != 0.0 || height_at(coord_of_disc(u - ey)) != 0.0
-        || height_at(c) != 0.0;
-    if !touched {
-        return n0;
+// Per texel of the contact's rect: the deformed skin's normal minus the undeformed one, by
+// central differences over one texel on the disc. Written into the elastomer's scratch
+// buffer once stage 2 is done with it; the camera interpolates it, so shading is smooth
+// across texels. Mirror: src/render/camera.rs skin_normals.
+@compute @workgroup_size(8, 8)
+fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
+        return;
     }
-    let dx = skin_at(u + ex) - skin_at(u - ex);
-    let dy = skin_at(u + ey) - skin_at(u - ey);
-    let n = cross(dx, dy);
+    let i = frame.texel_rect.x + id.x;
+    let j = frame.texel_rect.y + id.y;
+    let u = texel_centre(i, j);
+    let c = coord_of_disc(u);
+    var offset = vec3<f32>(0.0);
+    if c.x <= sensor.half_size_mm {
+        let n0 = surface_normal(c);
+        let ex = vec2<f32>(sensor.texel_mm, 0.0);
+        let ey = vec2<f32>(0.0, sensor.texel_mm);
+        var n = cross(skin_at(u + ex) - skin_at(u - ex), skin_at(u + ey) - skin_at(u - ey));
+        let len = length(n);
+        if len > 0.0 {
+            n = n / len;
+            if dot(n, n0) < 0.0 {
+                n = -n;
+            }
+            offset = n - n0;
+        }
+    }
+    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(offset, 0.0);
+}
+
+// Outward normal of the deformed skin: the undeformed normal plus the interpolated offset.
+fn skin_normal(c: vec2<f32>) -> vec3<f32> {
+    let n0 = surface_normal(c);
+    let taps = bilinear_taps(texel_of(disc_of(c)));
+    var offset = vec3<f32>(0.0);
+    for (var k = 0; k < 4; k++) {
+        if taps.index[k] >= 0 {
+            offset += taps.weight[k] * elastomer_scratch[taps.index[k]].xyz;
+        }
+    }
+    let n = n0 + offset;
     let len = length(n);
     if len == 0.0 {
         return n0;
-    }
-    if dot(n, n0) < 0.0 {
-        return -n / len;
     }
     return n / len;
 }

@@ -1,8 +1,9 @@
 //! use shared/common.wgsl
-// Stage 2, elastomer: blend the penetration along meridians, then along parallels (kernels
-// in surface millimetres), bulge, cap at the shell. Mirror: src/render/elastomer.rs.
-
-const BLEND_TAPS: i32 = 12;
+// Stage 2, elastomer: from the penetration p, the skin's drape (max-plus dilation with a
+// parabola of radius drape_mm), a narrow Gaussian blend and a wide one for the bulge, each
+// as two separable passes along the surface (meridians, then parallels), kernels in surface
+// millimetres; then h = max(drape, narrow) - bulge * max(wide - narrow, 0), capped to
+// [-T/2, T]. Mirror: src/render/elastomer.rs.
 
 fn sample_penetration(t: vec2<f32>) -> f32 {
     let taps = bilinear_taps(t);
@@ -15,21 +16,48 @@ fn sample_penetration(t: vec2<f32>) -> f32 {
     return v;
 }
 
-fn sample_meridian(t: vec2<f32>) -> vec2<f32> {
+fn sample_meridian(t: vec2<f32>) -> vec3<f32> {
     let taps = bilinear_taps(t);
-    var v = vec2<f32>(0.0);
+    var v = vec3<f32>(0.0);
     for (var k = 0; k < 4; k++) {
         if taps.index[k] >= 0 {
-            v += taps.weight[k] * meridian[taps.index[k]];
+            v += taps.weight[k] * elastomer_scratch[taps.index[k]].xyz;
         }
     }
     return v;
 }
 
-// Gaussian weights at surface offset x for sigma and 2 sigma.
-fn blend_weights(x: f32, sigma: f32) -> vec2<f32> {
-    let a = x / sigma;
-    return vec2<f32>(exp(-0.5 * a * a), exp(-0.125 * a * a));
+// Accumulates one separable pass.
+struct Pass {
+    drape: f32,
+    narrow: f32,
+    narrow_norm: f32,
+    wide: f32,
+    wide_norm: f32,
+}
+
+fn pass_start() -> Pass {
+    return Pass(-1e30, 0.0, 0.0, 0.0, 0.0);
+}
+
+fn pass_add(acc: ptr<function, Pass>, k: i32, x: f32, v: vec3<f32>) {
+    (*acc).drape = max((*acc).drape, v.x - x * x / (2.0 * sensor.drape_mm));
+    let sigma = sensor.blend_mm;
+    var a = select(0.0, 1.0, k == 0);
+    var b = a;
+    if sigma > 0.0 {
+        let q = x / sigma;
+        a = exp(-0.5 * q * q);
+        b = exp(-0.125 * q * q);
+    }
+    (*acc).narrow += a * v.y;
+    (*acc).narrow_norm += a;
+    (*acc).wide += b * v.z;
+    (*acc).wide_norm += b;
+}
+
+fn pass_result(acc: Pass) -> vec3<f32> {
+    return vec3<f32>(acc.drape, acc.narrow / acc.narrow_norm, acc.wide / acc.wide_norm);
 }
 
 @compute @workgroup_size(8, 8)
@@ -39,27 +67,19 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = frame.texel_rect.x + id.x;
     let j = frame.texel_rect.y + id.y;
-    let idx = j * sensor.texels + i;
-    let sigma = sensor.blend_mm;
-    if sigma <= 0.0 {
-        meridian[idx] = vec2<f32>(penetration[idx]);
-        return;
-    }
     let u = texel_centre(i, j);
     var dir = vec2<f32>(1.0, 0.0);
     if length(u) > 0.0 {
         dir = u / length(u);
     }
-    let step = 6.0 * sigma / f32(BLEND_TAPS);
-    var sum = vec2<f32>(0.0);
-    var norm = vec2<f32>(0.0);
-    for (var k = -BLEND_TAPS; k <= BLEND_TAPS; k++) {
+    let taps = i32(sensor.blend_taps);
+    let step = sensor.reach_mm / f32(taps);
+    var acc = pass_start();
+    for (var k = -taps; k <= taps; k++) {
         let x = f32(k) * step;
-        let w = blend_weights(x, sigma);
-        sum += w * sample_penetration(texel_of(u + x * dir));
-        norm += w;
+        pass_add(&acc, k, x, vec3<f32>(sample_penetration(texel_of(u + x * dir))));
     }
-    meridian[idx] = sum / norm;
+    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(pass_result(acc), 0.0);
 }
 
 @compute @workgroup_size(8, 8)
@@ -72,25 +92,21 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     let idx = j * sensor.texels + i;
     let c = coord_of_disc(texel_centre(i, j));
     let rho = parallel_radius(c.x);
-    let sigma = sensor.blend_mm;
-    var blend = meridian[idx];
-    if sigma > 0.0 && rho > 1e-6 {
-        let step = 6.0 * sigma / f32(BLEND_TAPS);
-        var sum = vec2<f32>(0.0);
-        var norm = vec2<f32>(0.0);
-        for (var k = -BLEND_TAPS; k <= BLEND_TAPS; k++) {
+    var v = elastomer_scratch[idx].xyz;
+    if rho > 1e-6 {
+        let taps = i32(sensor.blend_taps);
+        let step = sensor.reach_mm / f32(taps);
+        var acc = pass_start();
+        for (var k = -taps; k <= taps; k++) {
             let x = f32(k) * step;
-            let w = blend_weights(x, sigma);
-            sum += w * sample_meridian(texel_of(disc_of(vec2<f32>(c.x, c.y + x / rho))));
-            norm += w;
+            pass_add(&acc, k, x, sample_meridian(texel_of(disc_of(vec2<f32>(c.x, c.y + x / rho)))));
         }
-        blend = sum / norm;
+        v = pass_result(acc);
     }
-    let p = penetration[idx];
     let t = sensor.shell_thickness;
-    if p > t {
+    if penetration[idx] > t {
         atomicAdd(&counters[0], 1u);
     }
-    let pressed = max(p, blend.x);
-    height[idx] = clamp(pressed - sensor.bulge * max(blend.y - blend.x, 0.0), -0.5 * t, t);
+    let pressed = max(v.x, v.y);
+    height[idx] = clamp(pressed - sensor.bulge * max(v.z - v.y, 0.0), -0.5 * t, t);
 }

@@ -4,6 +4,7 @@
 //! [`sensor`] projection map; the [`paper`] module keeps the paper's printed formula to
 //! show where it goes wrong.
 pub mod error;
+pub mod experiment;
 pub mod finger;
 pub mod lens;
 pub mod paper;

@@ -2,12 +2,15 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use geltip::object::Object;
+use geltip::experiment::{self, Protocol};
+use geltip::localise::{load_frame, localise, Method};
+use geltip::object::{Object, Solid};
 use geltip::output;
 use geltip::render::gpu::Renderer;
 use geltip::render::{Contact, Frame, Place};
 use geltip::sensor::{Sensor, PRESETS};
 use glam::{DVec2, DVec3};
+use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -87,6 +90,46 @@ enum Command {
         #[arg(long = "depth-map")]
         depth_map: Option<PathBuf>,
     },
+    /// Find the contact in a tactile image and map it onto the finger.
+    ///
+    /// Example:
+    ///   geltip localise --sensor paper --reference ref.png --method surface sphere.png
+    #[command(verbatim_doc_comment)]
+    Localise {
+        #[arg(long)]
+        sensor: String,
+        /// The no-contact image of the same sensor.
+        #[arg(long)]
+        reference: PathBuf,
+        /// paper (the paper's detector) or surface (geltip's: noise-relative threshold,
+        /// averaging on the finger's surface).
+        #[arg(long, default_value = "surface")]
+        method: String,
+        /// The image with the contact.
+        image: PathBuf,
+    },
+    /// Run an experiment. `paper`: the paper's contact-localisation protocol (7 solids x 8
+    /// taps), rendered, localised by every method, scored against the ground truth.
+    ///
+    /// Example:
+    ///   geltip experiment paper --sensor paper --out out/experiment
+    #[command(verbatim_doc_comment)]
+    Experiment {
+        /// Which experiment (only `paper` for now).
+        #[arg(value_parser = ["paper"])]
+        name: String,
+        #[arg(long)]
+        sensor: String,
+        /// Directory for images, labels, taps.csv, tables.md and the chart.
+        #[arg(long)]
+        out: PathBuf,
+        /// Press depth of every tap, mm.
+        #[arg(long, default_value_t = 1.0)]
+        depth: f64,
+        /// Azimuth of the tapped side, degrees.
+        #[arg(long, default_value_t = 0.0)]
+        azimuth: f64,
+    },
     /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
     Objects {
         /// Directory to write into.
@@ -104,6 +147,11 @@ fn write_frame(frame: &Frame, png: &PathBuf, depth_map: Option<&PathBuf>) -> Res
 }
 
 fn main() {
+    // Mesa's Vulkan loader prints "error: XDG_RUNTIME_DIR is invalid" on headless machines
+    // while probing for a Wayland display geltip never uses; point it somewhere harmless.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     if let Err(e) = run(Cli::parse()) {
         eprintln!("error: {e:#}");
@@ -182,6 +230,50 @@ fn run(cli: Cli) -> Result<()> {
                 eprintln!("warning: the object pressed the gel against the rigid shell (depth beyond {} mm)", sensor.finger.shell_thickness);
             }
             println!("{}", truth.to_json());
+        }
+        Command::Localise {
+            sensor,
+            reference,
+            method,
+            image,
+        } => {
+            let sensor = Sensor::load(&sensor)?;
+            let method = Method::from_name(&method)?;
+            let reference = load_frame(&sensor, &reference)?;
+            let frame = load_frame(&sensor, &image)?;
+            let detection = localise(&sensor, &reference, &frame, method)?;
+            println!("{}", detection.to_json());
+        }
+        Command::Experiment {
+            name: _,
+            sensor,
+            out,
+            depth,
+            azimuth,
+        } => {
+            let sensor = Sensor::load(&sensor)?;
+            let protocol = Protocol {
+                depth_mm: depth,
+                azimuth_deg: azimuth,
+                ..Protocol::default()
+            };
+            let total = (Solid::ALL.len() * experiment::POSITIONS.len()) as u64;
+            let bar = ProgressBar::new(total).with_style(
+                ProgressStyle::with_template(
+                    "{elapsed_precise} [{bar:40}] {pos}/{len} taps {msg}",
+                )?
+                .progress_chars("=> "),
+            );
+            let report = experiment::run(&sensor, &protocol, Some(&out), |name| {
+                bar.set_message(name.to_string());
+                bar.inc(1);
+            })?;
+            bar.finish_and_clear();
+            println!("{}", report.tables_markdown());
+            println!(
+                "Wrote {}: images/, labels/, taps.csv, tables.md, errors_per_position.svg",
+                out.display()
+            );
         }
         Command::Objects { out } => {
             geltip::object::write_builtin_objects(&out)?;

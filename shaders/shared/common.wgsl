@@ -38,6 +38,12 @@ struct Sensor {
     shininess: f32,
     noise: f32,
     spread: f32,
+    // Elastomer: the skin's tightest bend (mm) and how far its kernels reach (mm).
+    drape_mm: f32,
+    reach_mm: f32,
+    // Elastomer kernel taps on each side of the centre.
+    blend_taps: u32,
+    _pad0: u32,
     _pad1: u32,
     _pad2: u32,
     led_position: array<vec4<f32>, 3>,
@@ -75,8 +81,9 @@ const GRID_OBJECT: u32 = 100u;
 @group(0) @binding(1) var<uniform> frame: Frame;
 // Stage 1 output: penetration of the object along the normal, per texel.
 @group(0) @binding(2) var<storage, read_write> penetration: array<f32>;
-// Stage 2 intermediate: (narrow, wide) blends along meridians.
-@group(0) @binding(3) var<storage, read_write> meridian: array<vec2<f32>>;
+// Stage 2 scratch: (drape, narrow blend, wide blend, -) along meridians; once the skin is
+// known, the offsets of its normals from the undeformed ones (read by the camera).
+@group(0) @binding(3) var<storage, read_write> elastomer_scratch: array<vec4<f32>>;
 // Stage 2 output: the skin's inward displacement, per texel.
 @group(0) @binding(4) var<storage, read_write> height: array<f32>;
 // Stage 3 output, two per pixel: (skin point, indentation), (ray direction, hit flag),

@@ -6,8 +6,8 @@
 //! bisection refines it. A grazing ray simply spends its steps over a longer stretch of shell.
 //! CPU mirror of `shaders/camera.wgsl` (same names).
 
-use super::elastomer::sample_field;
-use super::HeightfieldGrid;
+use super::elastomer::{bilinear_taps, sample_field};
+use super::{HeightfieldGrid, Rect};
 use crate::finger::{Finger, SurfaceCoord};
 use crate::sensor::Sensor;
 use glam::{DVec2, DVec3};
@@ -50,43 +50,57 @@ fn skin_at(finger: &Finger, grid: &HeightfieldGrid, height: &[f32], disc: DVec2)
     sp.point - height_at(grid, height, c) * sp.normal
 }
 
-/// Outward normal of the deformed skin at `coord`, by central differences on the disc (which
-/// has no seam or pole). Where the skin is untouched around the point, the exact normal.
-pub fn skin_normal(
+/// Offsets of the deformed skin's outward normal from the undeformed one, per texel of
+/// `rect` (zero elsewhere): central differences of the skin S(u) - h(u) n(u) over one texel
+/// on the disc, which has no seam or pole. The camera interpolates these offsets bilinearly,
+/// so shading stays smooth across texels (differentiating the bilinear heightfield itself
+/// would give a normal that jumps at every texel edge).
+pub fn skin_normals(
     finger: &Finger,
     grid: &HeightfieldGrid,
     height: &[f32],
+    rect: Rect,
+) -> Vec<DVec3> {
+    let n = grid.texels as usize;
+    let mut out = vec![DVec3::ZERO; n * n];
+    let e = grid.texel_mm();
+    let (ex, ey) = (DVec2::new(e, 0.0), DVec2::new(0.0, e));
+    for j in rect.y..rect.y + rect.h {
+        for i in rect.x..rect.x + rect.w {
+            let u = grid.texel_centre(i, j);
+            let c = SurfaceCoord::from_disc(u);
+            if c.s > grid.half_size_mm {
+                continue;
+            }
+            let n0 = finger.point_at(c).normal;
+            let dx = skin_at(finger, grid, height, u + ex) - skin_at(finger, grid, height, u - ex);
+            let dy = skin_at(finger, grid, height, u + ey) - skin_at(finger, grid, height, u - ey);
+            let mut normal = dx.cross(dy).normalize_or_zero();
+            if normal.dot(n0) < 0.0 {
+                normal = -normal;
+            }
+            if normal != DVec3::ZERO {
+                out[j as usize * n + i as usize] = normal - n0;
+            }
+        }
+    }
+    out
+}
+
+/// Outward normal of the deformed skin at `coord`: the undeformed normal plus the
+/// interpolated offset.
+pub fn skin_normal(
+    finger: &Finger,
+    grid: &HeightfieldGrid,
+    normals: &[DVec3],
     coord: SurfaceCoord,
 ) -> DVec3 {
-    let e = grid.texel_mm();
-    let u = coord.to_disc();
     let n0 = finger.point_at(coord).normal;
-    let offsets = [
-        DVec2::new(e, 0.0),
-        DVec2::new(-e, 0.0),
-        DVec2::new(0.0, e),
-        DVec2::new(0.0, -e),
-    ];
-    let touched = offsets
+    let offset: DVec3 = bilinear_taps(grid.texels, grid.texel_of(coord.to_disc()))
         .iter()
-        .any(|o| height_at(grid, height, SurfaceCoord::from_disc(u + *o)) != 0.0)
-        || height_at(grid, height, coord) != 0.0;
-    if !touched {
-        return n0;
-    }
-    let dx = skin_at(finger, grid, height, u + offsets[0])
-        - skin_at(finger, grid, height, u + offsets[1]);
-    let dy = skin_at(finger, grid, height, u + offsets[2])
-        - skin_at(finger, grid, height, u + offsets[3]);
-    let n = dx.cross(dy).normalize_or_zero();
-    if n == DVec3::ZERO {
-        return n0;
-    }
-    if n.dot(n0) < 0.0 {
-        -n
-    } else {
-        n
-    }
+        .filter_map(|&(i, w)| i.map(|i| normals[i] * w))
+        .sum();
+    (n0 + offset).try_normalize().unwrap_or(n0)
 }
 
 /// The skin point a pixel sees, or `None` outside the image or the lens's field of view.
@@ -94,6 +108,7 @@ pub fn cast_ray(
     sensor: &Sensor,
     grid: &HeightfieldGrid,
     height: &[f32],
+    normals: &[DVec3],
     pixel: DVec2,
     ray_steps: u32,
 ) -> Option<SkinHit> {
@@ -129,7 +144,7 @@ pub fn cast_ray(
     let coord = f.coord_of(point);
     Some(SkinHit {
         point,
-        normal: skin_normal(f, grid, height, coord),
+        normal: skin_normal(f, grid, normals, coord),
         indentation: height_at(grid, height, coord),
         ray: dir,
     })

@@ -25,26 +25,25 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
     let n = grid.texels as usize;
     let (mut penetration, mut height, mut over, mut texel_rect) =
         (vec![0.0; n * n], vec![0.0; n * n], 0, None);
+    let mut normals = vec![glam::DVec3::ZERO; n * n];
     if let Some(c) = contact {
         let pose = c.pose(sensor)?;
-        let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
+        let config = &sensor.config.elastomer;
+        let reach = elastomer::blend_reach_mm(config, sensor.finger.shell_thickness);
         texel_rect = contact::footprint(sensor, &grid, &pose, &c.object, reach);
         if let Some(rect) = texel_rect {
             penetration = contact::penetration_field(sensor, &grid, &pose, &c.object, rect);
-            let meridian = elastomer::blend_meridian(
-                &grid,
-                &penetration,
-                rect,
-                sensor.config.elastomer.blend_mm,
-            );
+            let meridian = elastomer::blend_meridian(&grid, config, reach, &penetration, rect);
             let (h, o) = elastomer::blend_azimuth(
                 &sensor.finger,
                 &grid,
+                config,
+                reach,
                 &penetration,
                 &meridian,
                 rect,
-                &sensor.config.elastomer,
             );
+            normals = camera::skin_normals(&sensor.finger, &grid, &h, rect);
             height = h;
             over = o;
         }
@@ -62,6 +61,7 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
                 sensor,
                 &grid,
                 &height,
+                &normals,
                 DVec2::new(x as f64, y as f64),
                 sensor.config.render.ray_steps,
             ) else {

@@ -24,6 +24,7 @@ struct Pipelines {
     contact: wgpu::ComputePipeline,
     blend_meridian: wgpu::ComputePipeline,
     blend_azimuth: wgpu::ComputePipeline,
+    skin_normals: wgpu::ComputePipeline,
     camera: wgpu::ComputePipeline,
     leds: wgpu::ComputePipeline,
     add_noise: wgpu::ComputePipeline,
@@ -59,7 +60,7 @@ pub struct Renderer {
     layout: wgpu::BindGroupLayout,
     sensor_buffer: wgpu::Buffer,
     penetration: wgpu::Buffer,
-    meridian: wgpu::Buffer,
+    elastomer_scratch: wgpu::Buffer,
     height: wgpu::Buffer,
     gbuffer: wgpu::Buffer,
     image: wgpu::Buffer,
@@ -117,9 +118,7 @@ impl Renderer {
         let slot_bytes = (pixels * 4).next_multiple_of(256);
         let limits = ctx.device.limits();
         let largest = (pixels * 48).max(slot_bytes * MAX_BATCH as u64);
-        if largest > limits.max_storage_buffer_binding_size
-            || largest > limits.max_buffer_size
-        {
+        if largest > limits.max_storage_buffer_binding_size || largest > limits.max_buffer_size {
             return Err(GeltipError::input(
                 "image",
                 format!(
@@ -164,6 +163,7 @@ impl Renderer {
             contact: p("contact", "contact")?,
             blend_meridian: p("elastomer", "blend_meridian")?,
             blend_azimuth: p("elastomer", "blend_azimuth")?,
+            skin_normals: p("camera", "skin_normals")?,
             camera: p("camera", "camera")?,
             leds: p("leds", "leds")?,
             add_noise: p("leds", "add_noise")?,
@@ -186,7 +186,7 @@ impl Renderer {
             layout,
             sensor_buffer,
             penetration: storage(ctx, "geltip penetration", texels * 4, none),
-            meridian: storage(ctx, "geltip meridian", texels * 8, none),
+            elastomer_scratch: storage(ctx, "geltip elastomer scratch", texels * 16, none),
             height: storage(ctx, "geltip height", texels * 4, none),
             gbuffer: storage(ctx, "geltip gbuffer", pixels * 48, none),
             image: storage(ctx, "geltip image", slot_bytes * MAX_BATCH as u64, none),
@@ -268,7 +268,7 @@ impl Renderer {
             whole(&self.sensor_buffer),
             whole(uniform),
             whole(&self.penetration),
-            whole(&self.meridian),
+            whole(&self.elastomer_scratch),
             whole(&self.height),
             whole(&self.gbuffer),
             slice(&self.image, slot * self.slot_bytes, self.slot_bytes),
@@ -323,7 +323,7 @@ impl Renderer {
 
     fn clear_heightfield(&self, encoder: &mut wgpu::CommandEncoder) {
         encoder.clear_buffer(&self.penetration, 0, None);
-        encoder.clear_buffer(&self.meridian, 0, None);
+        encoder.clear_buffer(&self.elastomer_scratch, 0, None);
         encoder.clear_buffer(&self.height, 0, None);
     }
 
@@ -373,7 +373,8 @@ impl Renderer {
     fn prepare(&mut self, contact: &Contact, noise_seed: u32) -> Result<Prepared> {
         let sensor = &self.sensor;
         let pose = contact.pose(sensor)?;
-        let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
+        let reach =
+            elastomer::blend_reach_mm(&sensor.config.elastomer, sensor.finger.shell_thickness);
         let texel_rect = contact::footprint(sensor, &self.grid, &pose, &contact.object, reach);
         let pixel_rect = texel_rect.and_then(|r| pixel_rect(sensor, &self.grid, r));
         let max_depth = contact::max_trace_depth(&sensor.finger, pose.depth_mm);
@@ -502,6 +503,7 @@ impl Renderer {
                 Self::dispatch(&mut encoder, &self.pipelines.contact, bind, g);
                 Self::dispatch(&mut encoder, &self.pipelines.blend_meridian, bind, g);
                 Self::dispatch(&mut encoder, &self.pipelines.blend_azimuth, bind, g);
+                Self::dispatch(&mut encoder, &self.pipelines.skin_normals, bind, g);
             }
             if let Some(r) = p.pixel_rect {
                 let g = (groups(r.w, 8), groups(r.h, 8));

@@ -35,12 +35,15 @@ pub struct SensorUniform {
     pub shininess: f32,
     pub noise: f32,
     pub spread: f32,
-    pub _pad: [u32; 2],
+    pub drape_mm: f32,
+    pub reach_mm: f32,
+    pub blend_taps: u32,
+    pub _pad: [u32; 3],
     pub led_position: [[f32; 4]; 3],
     pub led_colour: [[f32; 4]; 3],
 }
 
-const _: () = assert!(std::mem::size_of::<SensorUniform>() == 224);
+const _: () = assert!(std::mem::size_of::<SensorUniform>() == 240);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -73,6 +76,7 @@ impl SensorUniform {
         let c = &sensor.config;
         let lights = leds::leds(sensor);
         let f = &sensor.finger;
+        let reach = super::elastomer::blend_reach_mm(&c.elastomer, f.shell_thickness);
         SensorUniform {
             radius: f.radius as f32,
             cylinder_length: f.cylinder_length as f32,
@@ -104,7 +108,10 @@ impl SensorUniform {
             shininess: c.paint.shininess as f32,
             noise: c.render.noise as f32,
             spread: c.leds.spread as f32,
-            _pad: [0; 2],
+            drape_mm: c.elastomer.drape_mm as f32,
+            reach_mm: reach as f32,
+            blend_taps: super::elastomer::blend_taps(reach, grid) as u32,
+            _pad: [0; 3],
             led_position: lights.map(|l| {
                 [
                     l.position.x as f32,
