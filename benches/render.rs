@@ -1,5 +1,6 @@
 //! Renderer throughput at the paper sensor's 640x480, printed as a table:
-//! `cargo bench --bench render` (add `-- --frames N` for more frames per row).
+//! `cargo bench --bench render` (add `-- --frames N` for more frames per row, `-- --sensor
+//! <preset|file.toml>` for another sensor).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
@@ -55,14 +56,22 @@ fn main() -> anyhow::Result<()> {
         .map(|v| v.parse())
         .transpose()?
         .unwrap_or(64);
-    let sensor = Sensor::preset("paper")?;
+    let sensor_arg = args
+        .iter()
+        .position(|a| a == "--sensor")
+        .and_then(|i| args.get(i + 1))
+        .cloned()
+        .unwrap_or_else(|| "paper".to_string());
+    let sensor = Sensor::load(&sensor_arg)?;
     let start = Instant::now();
     let mut r = Renderer::new(&sensor)?;
     let info = r.adapter().clone();
     println!(
-        "geltip render benchmark: {}x{}, adapter {} ({:?}), start-up {:.2} s",
+        "geltip render benchmark: sensor {}, {}x{}, heightfield {}, adapter {} ({:?}), start-up {:.2} s",
+        sensor.name,
         sensor.width,
         sensor.height,
+        sensor.config.render.heightfield_texels,
         info.name,
         info.backend,
         start.elapsed().as_secs_f64()
@@ -107,5 +116,24 @@ fn main() -> anyhow::Result<()> {
         start.elapsed(),
         r.timings(),
     );
+
+    // Where a contact frame's time goes: each stage submitted and waited for on its own,
+    // averaged over the first eight contacts (one per tap position of the paper).
+    println!();
+    println!("| {:<28} | {:>8} |", "stage (one contact)", "ms");
+    println!("|{:-<30}|{:->10}|", "", "");
+    let mut totals: Vec<(&str, f64)> = Vec::new();
+    let sample = &list[..list.len().min(8)];
+    for c in sample {
+        for (i, (name, d)) in r.profile_stages(c)?.into_iter().enumerate() {
+            if totals.len() <= i {
+                totals.push((name, 0.0));
+            }
+            totals[i].1 += d.as_secs_f64() * 1e3 / sample.len() as f64;
+        }
+    }
+    for (name, ms) in totals {
+        println!("| {name:<28} | {ms:>8.2} |");
+    }
     Ok(())
 }

@@ -3,7 +3,8 @@
 // steps bracket the first point where the ray leaves the gel, bisection refines it.
 // Writes the G-buffer the LED stage shades. Mirror: src/render/camera.rs.
 
-const BISECTION_STEPS: u32 = 14u;
+const BISECTION_STEPS: u32 = 6u;
+const UNTOUCHED_PROBES: u32 = 5u;
 
 fn height_at(c: vec2<f32>) -> f32 {
     let taps = bilinear_taps(texel_of(disc_of(c)));
@@ -82,11 +83,14 @@ struct SkinHit {
     indentation: f32,
     ray: vec3<f32>,
     valid: bool,
+    // The ray crossed untouched skin: the pixel is the reference frame's.
+    untouched: bool,
 }
 
 fn cast_ray(px: vec2<f32>) -> SkinHit {
     var hit: SkinHit;
     hit.valid = false;
+    hit.untouched = false;
     let ray = pixel_ray(px);
     if ray.w == 0.0 {
         return hit;
@@ -96,17 +100,32 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
     // Bulges rise up to half the shell thickness above the surface.
     let t_out = capsule_hit(dir, 0.5 * sensor.shell_thickness);
     var t_hit = capsule_hit(dir, 0.0);
+    // Most rays cross untouched skin: then the skin is the surface itself, exactly, with no
+    // march (the reference frame is all such rays, so a frame's untouched pixels match it).
+    var steps = 0u;
+    for (var k = 0u; k < UNTOUCHED_PROBES; k++) {
+        let t = t_in + (t_out - t_in) * f32(k) / f32(UNTOUCHED_PROBES - 1u);
+        if height_at(coord_of(t * dir)) != 0.0 {
+            steps = sensor.ray_steps;
+            break;
+        }
+    }
+    hit.untouched = steps == 0u;
     var t_prev = t_in;
-    for (var k = 1u; k <= sensor.ray_steps; k++) {
+    for (var k = 1u; k <= steps; k++) {
         let t = t_in + (t_out - t_in) * f32(k) / f32(sensor.ray_steps);
         if gap(t, dir) < 0.0 {
             var lo = t_prev;
             var hi = t;
+            var g_lo = gap(lo, dir);
+            var g_hi = gap(hi, dir);
             for (var b = 0u; b < BISECTION_STEPS; b++) {
                 let mid = 0.5 * (lo + hi);
-                if gap(mid, dir) < 0.0 { hi = mid; } else { lo = mid; }
+                let g = gap(mid, dir);
+                if g < 0.0 { hi = mid; g_hi = g; } else { lo = mid; g_lo = g; }
             }
-            t_hit = 0.5 * (lo + hi);
+            // Secant step inside the last bracket.
+            t_hit = lo + (hi - lo) * clamp(g_lo / max(g_lo - g_hi, 1e-12), 0.0, 1.0);
             break;
         }
         t_prev = t;
@@ -130,7 +149,8 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = y * sensor.image_size.x + x;
     let hit = cast_ray(vec2<f32>(f32(x), f32(y)));
     gbuffer[3u * i] = vec4<f32>(hit.point, hit.indentation);
-    gbuffer[3u * i + 1u] = vec4<f32>(hit.ray, select(0.0, 1.0, hit.valid));
+    // w: 0 = no ray, 1 = shade, 2 = untouched (keep the reference's pixel).
+    gbuffer[3u * i + 1u] = vec4<f32>(hit.ray, select(0.0, select(1.0, 2.0, hit.untouched), hit.valid));
     gbuffer[3u * i + 2u] = vec4<f32>(hit.normal, 0.0);
 }
 

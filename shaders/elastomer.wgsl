@@ -108,5 +108,11 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
         atomicAdd(&counters[0], 1u);
     }
     let pressed = max(v.x, v.y);
-    height[idx] = clamp(pressed - sensor.bulge * max(v.z - v.y, 0.0), -0.5 * t, t);
+    var h = clamp(pressed - sensor.bulge * max(v.z - v.y, 0.0), -0.5 * t, t);
+    // Mirror: HEIGHT_EPSILON_MM. Gaussian tails are not a deformation; the camera marches
+    // only where there is one.
+    if abs(h) < 1e-3 {
+        h = 0.0;
+    }
+    height[idx] = h;
 }

@@ -52,6 +52,10 @@ fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = y * sensor.image_size.x + x;
     let g0 = gbuffer[3u * i];
     let g1 = gbuffer[3u * i + 1u];
+    // Untouched skin in a contact frame: the pixel copied from the reference stays.
+    if g1.w == 2.0 && frame.object_kind != REFERENCE_FRAME {
+        return;
+    }
     if g1.w == 0.0 {
         image[i] = pack_rgba(vec3<u32>(0u));
         indentation[i] = 0.0;

@@ -150,8 +150,8 @@ pub struct RenderConfig {
 impl Default for RenderConfig {
     fn default() -> Self {
         RenderConfig {
-            heightfield_texels: 512,
-            ray_steps: 12,
+            heightfield_texels: 256,
+            ray_steps: 8,
             noise: 0.0,
             noise_seed: 0,
         }
@@ -549,13 +549,14 @@ impl Sensor {
             return Err(NotVisible::AtCamera);
         }
         let theta = lateral.atan2(point.z);
-        if theta > self.lens.max_theta {
+        // The lens edge itself is inside, up to rounding (as in `Lens::unproject`).
+        if theta > self.lens.max_theta * (1.0 + 1e-12) {
             return Err(NotVisible::OutsideFov {
                 theta_deg: theta.to_degrees(),
                 half_fov_deg: self.lens.max_theta.to_degrees(),
             });
         }
-        let rho = self.lens.project(theta);
+        let rho = self.lens.project(theta.min(self.lens.max_theta));
         let pixel = if lateral == 0.0 {
             self.principal
         } else {

@@ -76,6 +76,8 @@ struct Frame {
 }
 
 const GRID_OBJECT: u32 = 100u;
+// object_kind of the reference frame (no object; every pixel is shaded).
+const REFERENCE_FRAME: u32 = 101u;
 
 @group(0) @binding(0) var<uniform> sensor: Sensor;
 @group(0) @binding(1) var<uniform> frame: Frame;

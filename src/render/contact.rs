@@ -70,9 +70,9 @@ pub fn footprint(
 ) -> Option<Rect> {
     let f = &sensor.finger;
     let max_depth = max_trace_depth(f, pose.depth_mm);
-    // Coarse cells of 4x4 texels; the disc-to-surface map never stretches distances, so every
+    // Coarse cells of 2x2 texels; the disc-to-surface map never stretches distances, so every
     // surface point in a cell lies within half its diagonal of the cell's centre.
-    const CELL: u32 = 4;
+    const CELL: u32 = 2;
     let cells = grid.texels.div_ceil(CELL);
     let cell_mm = grid.texel_mm() * CELL as f64;
     let tolerance = cell_mm * std::f64::consts::FRAC_1_SQRT_2 + TRACE_EPSILON_MM;
@@ -80,6 +80,9 @@ pub fn footprint(
     let mut lo = DVec2::splat(f64::INFINITY);
     let mut hi = DVec2::splat(f64::NEG_INFINITY);
     let mut s_hi: f64 = 0.0;
+    // Largest |cos phi| and |sin phi| over the footprint: the radial and tangential
+    // directions on the disc, along which the elastomer's kernels reach.
+    let mut trig = DVec2::ZERO;
     for cj in 0..cells {
         for ci in 0..cells {
             let disc = DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm
@@ -96,6 +99,10 @@ pub fn footprint(
                 lo = lo.min(t);
                 hi = hi.max(t);
                 s_hi = s_hi.max(coord.s + cell_mm);
+                trig = trig.max(DVec2::new(coord.phi.cos().abs(), coord.phi.sin().abs()));
+                if coord.s <= cell_mm {
+                    trig = DVec2::ONE;
+                }
             }
         }
     }
@@ -103,8 +110,12 @@ pub fn footprint(
         return None;
     }
     // Azimuthal surface distance maps to s / rho(s) times as much disc distance.
+    // A tangential step at azimuth phi moves along (-sin, cos) on the disc, a radial one
+    // along (cos, sin).
     let stretch = (s_hi / parallel_radius(f, s_hi).max(1e-9)).max(1.0);
-    let pad = (blend_reach_mm * stretch) / grid.texel_mm() + CELL as f64;
+    let pad = DVec2::new(stretch * trig.y + trig.x, stretch * trig.x + trig.y) * blend_reach_mm
+        / grid.texel_mm()
+        + DVec2::splat(CELL as f64);
     Rect::covering(lo, hi, pad, (grid.texels, grid.texels))
 }
 

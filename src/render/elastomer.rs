@@ -168,8 +168,17 @@ pub fn blend_azimuth(
     (height, over)
 }
 
+/// Displacements smaller than this (mm) are none: the Gaussians' tails would otherwise mark
+/// the whole footprint rectangle as touched, and the camera marches only where it is.
+pub const HEIGHT_EPSILON_MM: f64 = 1e-3;
+
 /// The skin's inward displacement from (drape, narrow, wide).
 pub fn skin_displacement(v: DVec3, thickness: f64, bulge: f64) -> f64 {
     let pressed = v.x.max(v.y);
-    (pressed - bulge * (v.z - v.y).max(0.0)).clamp(-0.5 * thickness, thickness)
+    let h = (pressed - bulge * (v.z - v.y).max(0.0)).clamp(-0.5 * thickness, thickness);
+    if h.abs() < HEIGHT_EPSILON_MM {
+        0.0
+    } else {
+        h
+    }
 }

@@ -526,22 +526,101 @@ impl Renderer {
         let pixels = (w * h) as usize;
         let words = self.slot_bytes as usize / 4;
         let images: Vec<u32> = read_buffer(self.ctx, &self.image, 0, words * n)?;
-        let depths: Vec<f32> = read_buffer(self.ctx, &self.indentation, 0, words * n)?;
         let counters: Vec<u32> =
             read_buffer(self.ctx, &self.counters, 0, (COUNTER_SLOT as usize / 4) * n)?;
-        let frames = (0..n)
-            .map(|k| {
-                let frame = Frame {
-                    width: w,
-                    height: h,
-                    rgba: bytemuck::cast_slice(&images[k * words..k * words + pixels]).to_vec(),
-                    indentation: depths[k * words..k * words + pixels].to_vec(),
-                };
-                (frame, counters[k * COUNTER_SLOT as usize / 4])
-            })
-            .collect();
+        let mut frames = Vec::with_capacity(n);
+        for (k, p) in prepared.iter().enumerate() {
+            // Indentation is zero outside the re-rendered rows: read only those.
+            let mut indentation = vec![0.0f32; pixels];
+            if let Some(r) = p.pixel_rect {
+                let start = (r.y * w) as usize;
+                let rows: Vec<f32> = read_buffer(
+                    self.ctx,
+                    &self.indentation,
+                    k as u64 * self.slot_bytes + start as u64 * 4,
+                    (r.h * w) as usize,
+                )?;
+                indentation[start..start + rows.len()].copy_from_slice(&rows);
+            }
+            let frame = Frame {
+                width: w,
+                height: h,
+                rgba: bytemuck::cast_slice(&images[k * words..k * words + pixels]).to_vec(),
+                indentation,
+            };
+            frames.push((frame, counters[k * COUNTER_SLOT as usize / 4]));
+        }
         timings.readback += rendered.elapsed();
         Ok(frames)
+    }
+
+    /// Renders one contact stage by stage, waiting after each, and returns each stage's wall
+    /// time (for the benchmark's breakdown; slower than [`Renderer::render`]).
+    pub fn profile_stages(&mut self, contact: &Contact) -> Result<Vec<(&'static str, Duration)>> {
+        let p = self.prepare(contact, 0)?;
+        let uniform = self.uniform_buffer(&p.uniform);
+        let bind = self.bind_group(&uniform, 0, Some(&p.object));
+        let t = p
+            .texel_rect
+            .map(|t| (groups(t.w, 8), groups(t.h, 8)))
+            .unwrap_or((0, 0));
+        let r = p
+            .pixel_rect
+            .map(|r| (groups(r.w, 8), groups(r.h, 8)))
+            .unwrap_or((0, 0));
+        let stages: [(&'static str, Option<&wgpu::ComputePipeline>, (u32, u32)); 8] = [
+            ("copy reference + clear", None, (0, 0)),
+            ("contact", Some(&self.pipelines.contact), t),
+            (
+                "elastomer: meridians",
+                Some(&self.pipelines.blend_meridian),
+                t,
+            ),
+            (
+                "elastomer: parallels",
+                Some(&self.pipelines.blend_azimuth),
+                t,
+            ),
+            (
+                "elastomer: skin normals",
+                Some(&self.pipelines.skin_normals),
+                t,
+            ),
+            ("camera", Some(&self.pipelines.camera), r),
+            ("leds", Some(&self.pipelines.leds), r),
+            ("readback", None, (0, 0)),
+        ];
+        let mut out = Vec::new();
+        for (name, pipeline, g) in stages {
+            let start = Instant::now();
+            if name == "readback" {
+                let words = self.slot_bytes as usize / 4;
+                let _: Vec<u32> = read_buffer(self.ctx, &self.image, 0, words)?;
+                let _: Vec<f32> = read_buffer(self.ctx, &self.indentation, 0, words)?;
+            } else {
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                match pipeline {
+                    Some(pipeline) => Self::dispatch(&mut encoder, pipeline, &bind, g),
+                    None => {
+                        encoder.copy_buffer_to_buffer(
+                            &self.reference_image,
+                            0,
+                            &self.image,
+                            0,
+                            Some(self.slot_bytes),
+                        );
+                        encoder.clear_buffer(&self.indentation, 0, Some(self.slot_bytes));
+                        self.clear_heightfield(&mut encoder);
+                    }
+                }
+                self.ctx.submit_and_wait(name, encoder)?;
+            }
+            out.push((name, start.elapsed()));
+        }
+        if let (Some(t), Some(r)) = (p.texel_rect, p.pixel_rect) {
+            log::info!("texel rect {}x{}, pixel rect {}x{}", t.w, t.h, r.w, r.h);
+        }
+        Ok(out)
     }
 
     /// The undeformed surface points the GPU's lens rays meet for `pixels` (None beyond the

@@ -327,13 +327,13 @@ pub struct Rect {
 }
 
 impl Rect {
-    /// The rectangle covering continuous coordinates [lo, hi], grown by `pad` cells and
-    /// clipped to a `size` x `size2` grid; `None` when nothing is left.
-    pub fn covering(lo: DVec2, hi: DVec2, pad: f64, size: (u32, u32)) -> Option<Rect> {
-        let x0 = (lo.x - pad).floor().max(0.0);
-        let y0 = (lo.y - pad).floor().max(0.0);
-        let x1 = (hi.x + pad).ceil().min(size.0 as f64);
-        let y1 = (hi.y + pad).ceil().min(size.1 as f64);
+    /// The rectangle covering continuous coordinates [lo, hi], grown by `pad` cells (x, y)
+    /// and clipped to a `size.0` x `size.1` grid; `None` when nothing is left.
+    pub fn covering(lo: DVec2, hi: DVec2, pad: DVec2, size: (u32, u32)) -> Option<Rect> {
+        let x0 = (lo.x - pad.x).floor().max(0.0);
+        let y0 = (lo.y - pad.y).floor().max(0.0);
+        let x1 = (hi.x + pad.x).ceil().min(size.0 as f64);
+        let y1 = (hi.y + pad.y).ceil().min(size.1 as f64);
         if !(x1 > x0 && y1 > y0) {
             return None;
         }
@@ -399,6 +399,6 @@ pub fn pixel_rect(sensor: &Sensor, grid: &HeightfieldGrid, rect: Rect) -> Option
     // Between samples the projected boundary can bulge out by a fraction of the sample
     // spacing: grow by that spacing plus two pixels.
     let spacing = (hi - lo) / SAMPLES as f64;
-    let pad = spacing.max_element() + 2.0;
+    let pad = DVec2::splat(spacing.max_element() + 2.0);
     Rect::covering(lo, hi, pad, (sensor.width, sensor.height))
 }

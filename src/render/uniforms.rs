@@ -66,6 +66,8 @@ const _: () = assert!(std::mem::size_of::<FrameUniform>() == 144);
 
 /// `object_kind` of a loaded mesh's baked SDF grid (WGSL `GRID_OBJECT`).
 pub const GRID_OBJECT: u32 = 100;
+/// `object_kind` of the reference frame: no object, every pixel shaded (WGSL `REFERENCE_FRAME`).
+pub const REFERENCE_FRAME: u32 = 101;
 
 fn rect4(r: Option<Rect>) -> [u32; 4] {
     r.map(|r| [r.x, r.y, r.w, r.h]).unwrap_or([0; 4])
@@ -131,6 +133,7 @@ impl FrameUniform {
     pub fn reference(sensor: &Sensor, noise_seed: u32) -> Self {
         FrameUniform {
             pixel_rect: [0, 0, sensor.width, sensor.height],
+            object_kind: REFERENCE_FRAME,
             noise_seed,
             ..Zeroable::zeroed()
         }
