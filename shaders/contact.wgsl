@@ -47,19 +47,22 @@ fn to_object(p: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(frame.object_x.xyz, q), dot(frame.object_y.xyz, q), dot(frame.object_z.xyz, q));
 }
 
-// Largest lambda in [0, frame.origin.w] with S - lambda n inside the object: sphere tracing
-// from the deep end outwards meets the deepest object point first.
+// The skin's inward displacement where the object presses it: the largest lambda with
+// S - lambda n inside the object grown by drape_mm, less drape_mm (the skin drapes from an
+// edge on a circle instead of a cliff). Sphere tracing from the deep end outwards meets the
+// deepest object point first. Mirror: src/render/contact.rs penetration.
 fn penetration_at(c: vec2<f32>) -> f32 {
     let s = surface_point(c);
     let n = surface_normal(c);
-    var lambda = frame.origin.w;
+    let drape = sensor.drape_mm;
+    var lambda = frame.origin.w + drape;
     for (var i = 0u; i < MAX_TRACE_STEPS; i++) {
-        let d = object_sdf(to_object(s - lambda * n));
+        let d = object_sdf(to_object(s - lambda * n)) - drape;
         if d <= TRACE_EPSILON_MM {
-            return max(lambda, 0.0);
+            return max(lambda - drape, 0.0);
         }
         lambda -= d;
-        if lambda < 0.0 {
+        if lambda < drape {
             return 0.0;
         }
     }

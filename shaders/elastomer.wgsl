@@ -1,9 +1,9 @@
 //! use shared/common.wgsl
-// Stage 2, elastomer: from the penetration p, the skin's drape (max-plus dilation with a
-// parabola of radius drape_mm), a narrow Gaussian blend and a wide one for the bulge, each
-// as two separable passes along the surface (meridians, then parallels), kernels in surface
-// millimetres; then h = max(drape, narrow) - bulge * max(wide - narrow, 0), capped to
-// [-T/2, T]. Mirror: src/render/elastomer.rs.
+// Stage 2, elastomer: the contact stage already drapes the skin from the object's edges;
+// here the imprint p blends (narrow Gaussian of blend_mm) and the displaced gel bulges
+// around it (the excess of a Gaussian twice as wide), h = max(p, narrow) - bulge *
+// max(wide - narrow, 0), capped to [-T/2, T]. Separable passes along the surface (meridians,
+// then parallels), kernels in surface millimetres. Mirror: src/render/elastomer.rs.
 
 fn sample_penetration(t: vec2<f32>) -> f32 {
     let taps = bilinear_taps(t);
@@ -16,48 +16,25 @@ fn sample_penetration(t: vec2<f32>) -> f32 {
     return v;
 }
 
-fn sample_meridian(t: vec2<f32>) -> vec3<f32> {
+fn sample_meridian(t: vec2<f32>) -> vec2<f32> {
     let taps = bilinear_taps(t);
-    var v = vec3<f32>(0.0);
+    var v = vec2<f32>(0.0);
     for (var k = 0; k < 4; k++) {
         if taps.index[k] >= 0 {
-            v += taps.weight[k] * elastomer_scratch[taps.index[k]].xyz;
+            v += taps.weight[k] * elastomer_scratch[taps.index[k]].xy;
         }
     }
     return v;
 }
 
-// Accumulates one separable pass.
-struct Pass {
-    drape: f32,
-    narrow: f32,
-    narrow_norm: f32,
-    wide: f32,
-    wide_norm: f32,
-}
-
-fn pass_start() -> Pass {
-    return Pass(-1e30, 0.0, 0.0, 0.0, 0.0);
-}
-
-fn pass_add(acc: ptr<function, Pass>, k: i32, x: f32, v: vec3<f32>) {
-    (*acc).drape = max((*acc).drape, v.x - x * x / (2.0 * sensor.drape_mm));
+// Weights of the narrow (x) and wide (y) Gaussians at surface offset x (tap k).
+fn blend_weights(k: i32, x: f32) -> vec2<f32> {
     let sigma = sensor.blend_mm;
-    var a = select(0.0, 1.0, k == 0);
-    var b = a;
-    if sigma > 0.0 {
-        let q = x / sigma;
-        a = exp(-0.5 * q * q);
-        b = exp(-0.125 * q * q);
+    if sigma <= 0.0 {
+        return vec2<f32>(select(0.0, 1.0, k == 0));
     }
-    (*acc).narrow += a * v.y;
-    (*acc).narrow_norm += a;
-    (*acc).wide += b * v.z;
-    (*acc).wide_norm += b;
-}
-
-fn pass_result(acc: Pass) -> vec3<f32> {
-    return vec3<f32>(acc.drape, acc.narrow / acc.narrow_norm, acc.wide / acc.wide_norm);
+    let q = x / sigma;
+    return vec2<f32>(exp(-0.5 * q * q), exp(-0.125 * q * q));
 }
 
 @compute @workgroup_size(8, 8)
@@ -74,12 +51,15 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let taps = i32(sensor.blend_taps);
     let step = sensor.reach_mm / f32(taps);
-    var acc = pass_start();
+    var acc = vec2<f32>(0.0);
+    var norm = vec2<f32>(0.0);
     for (var k = -taps; k <= taps; k++) {
         let x = f32(k) * step;
-        pass_add(&acc, k, x, vec3<f32>(sample_penetration(texel_of(u + x * dir))));
+        let w = blend_weights(k, x);
+        acc += w * sample_penetration(texel_of(u + x * dir));
+        norm += w;
     }
-    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(pass_result(acc), 0.0);
+    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(acc / norm, 0.0, 0.0);
 }
 
 @compute @workgroup_size(8, 8)
@@ -92,23 +72,26 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     let idx = j * sensor.texels + i;
     let c = coord_of_disc(texel_centre(i, j));
     let rho = parallel_radius(c.x);
-    var v = elastomer_scratch[idx].xyz;
+    var v = elastomer_scratch[idx].xy;
     if rho > 1e-6 {
         let taps = i32(sensor.blend_taps);
         let step = sensor.reach_mm / f32(taps);
-        var acc = pass_start();
+        var acc = vec2<f32>(0.0);
+        var norm = vec2<f32>(0.0);
         for (var k = -taps; k <= taps; k++) {
             let x = f32(k) * step;
-            pass_add(&acc, k, x, sample_meridian(texel_of(disc_of(vec2<f32>(c.x, c.y + x / rho)))));
+            let w = blend_weights(k, x);
+            acc += w * sample_meridian(texel_of(disc_of(vec2<f32>(c.x, c.y + x / rho))));
+            norm += w;
         }
-        v = pass_result(acc);
+        v = acc / norm;
     }
     let t = sensor.shell_thickness;
     if penetration[idx] > t {
         atomicAdd(&counters[0], 1u);
     }
-    let pressed = max(v.x, v.y);
-    var h = clamp(pressed - sensor.bulge * max(v.z - v.y, 0.0), -0.5 * t, t);
+    let pressed = max(penetration[idx], v.x);
+    var h = clamp(pressed - sensor.bulge * max(v.y - v.x, 0.0), -0.5 * t, t);
     // Mirror: HEIGHT_EPSILON_MM. Gaussian tails are not a deformation; the camera marches
     // only where there is one.
     if abs(h) < 1e-3 {

@@ -54,8 +54,9 @@ pub struct ImageConfig {
 pub struct ElastomerConfig {
     /// Standard deviation (mm, along the surface) of the blur that blends the imprint's edge.
     pub blend_mm: f64,
-    /// The tightest radius (mm) the skin can bend to: where the object's edge is a cliff, the
-    /// skin drapes from it on a parabola of this radius of curvature instead of stepping.
+    /// The tightest radius (mm) the skin can bend to: past an object's edge the skin falls away
+    /// on a circle of this radius instead of a cliff. At least the shell thickness, so that
+    /// even a full-depth press reaches back to the surface.
     pub drape_mm: f64,
     /// How much of the displaced gel bulges out around the imprint (0 = none): the bulge is
     /// this fraction of the difference between a blend twice as wide and the blend itself.
@@ -66,7 +67,7 @@ impl Default for ElastomerConfig {
     fn default() -> Self {
         ElastomerConfig {
             blend_mm: 0.5,
-            drape_mm: 1.0,
+            drape_mm: 2.0,
             bulge: 0.3,
         }
     }
@@ -326,6 +327,15 @@ impl SensorConfig {
         non_negative("elastomer.blend_mm", self.elastomer.blend_mm)?;
         non_negative("elastomer.bulge", self.elastomer.bulge)?;
         finite_positive("elastomer.drape_mm", self.elastomer.drape_mm)?;
+        if self.elastomer.drape_mm < self.finger.shell_thickness_mm {
+            return Err(GeltipError::config(
+                "elastomer.drape_mm",
+                format!(
+                    "must be at least finger.shell_thickness_mm ({}), got {}",
+                    self.finger.shell_thickness_mm, self.elastomer.drape_mm
+                ),
+            ));
+        }
         if self.elastomer.bulge > 1.0 {
             return Err(GeltipError::config(
                 "elastomer.bulge",

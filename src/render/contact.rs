@@ -23,7 +23,11 @@ pub fn max_trace_depth(finger: &Finger, depth_mm: f64) -> f64 {
     (2.0 * depth_mm).min(finger.shell_thickness) + 0.5
 }
 
-/// Penetration (mm) of the object into the skin at `coord`, traced from `max_depth` inwards.
+/// Inward displacement (mm) of the skin at `coord` where the object presses it, traced from
+/// `max_depth` inwards. The skin cannot bend tighter than `drape` mm, so it is the object
+/// grown by `drape` (its SDF minus `drape`) that is traced, less `drape`: under the object the
+/// skin follows it, past an edge it falls away on a circle of that radius instead of a cliff
+/// (computed from the SDF itself, so no grid can turn the edge into a staircase).
 /// `hit_tolerance` > TRACE_EPSILON_MM makes it conservative (used by the footprint scan).
 pub fn penetration(
     finger: &Finger,
@@ -31,18 +35,19 @@ pub fn penetration(
     object: &Object,
     coord: SurfaceCoord,
     max_depth: f64,
+    drape: f64,
     hit_tolerance: f64,
 ) -> f64 {
     let sp = finger.point_at(coord);
-    let mut lambda = max_depth;
+    let mut lambda = max_depth + drape;
     for _ in 0..MAX_TRACE_STEPS {
         let q = sp.point - lambda * sp.normal;
-        let d = object.sdf(pose.to_object(q));
+        let d = object.sdf(pose.to_object(q)) - drape;
         if d <= hit_tolerance {
-            return lambda.max(0.0);
+            return (lambda - drape).max(0.0);
         }
         lambda -= d;
-        if lambda < 0.0 {
+        if lambda < drape {
             return 0.0;
         }
     }
@@ -76,7 +81,8 @@ pub fn footprint(
     let cells = grid.texels.div_ceil(CELL);
     let cell_mm = grid.texel_mm() * CELL as f64;
     let tolerance = cell_mm * std::f64::consts::FRAC_1_SQRT_2 + TRACE_EPSILON_MM;
-    let reach = object.bounding_radius() + max_depth + tolerance;
+    let drape = sensor.config.elastomer.drape_mm;
+    let reach = object.bounding_radius() + max_depth + drape + tolerance;
     let mut lo = DVec2::splat(f64::INFINITY);
     let mut hi = DVec2::splat(f64::NEG_INFINITY);
     let mut s_hi: f64 = 0.0;
@@ -94,7 +100,7 @@ pub fn footprint(
             if (f.point_at(coord).point - pose.origin).length() > reach {
                 continue;
             }
-            if penetration(f, pose, object, coord, max_depth, tolerance) > 0.0 {
+            if penetration(f, pose, object, coord, max_depth, drape, tolerance) > 0.0 {
                 let t = grid.texel_of(disc);
                 lo = lo.min(t);
                 hi = hi.max(t);
@@ -130,6 +136,7 @@ pub fn penetration_field(
     let f = &sensor.finger;
     let n = grid.texels as usize;
     let max_depth = max_trace_depth(f, pose.depth_mm);
+    let drape = sensor.config.elastomer.drape_mm;
     let mut field = vec![0.0f32; n * n];
     for j in rect.y..rect.y + rect.h {
         for i in rect.x..rect.x + rect.w {
@@ -142,7 +149,8 @@ pub fn penetration_field(
                     (DVec2::new((k & 1) as f64, (k >> 1) as f64) - 0.5) * 0.5 * grid.texel_mm();
                 let coord = SurfaceCoord::from_disc(centre + offset);
                 if coord.s <= grid.half_size_mm {
-                    p += 0.25 * penetration(f, pose, object, coord, max_depth, TRACE_EPSILON_MM);
+                    p += 0.25
+                        * penetration(f, pose, object, coord, max_depth, drape, TRACE_EPSILON_MM);
                 }
             }
             field[j as usize * n + i as usize] = p as f32;

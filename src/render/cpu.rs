@@ -29,7 +29,7 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
     if let Some(c) = contact {
         let pose = c.pose(sensor)?;
         let config = &sensor.config.elastomer;
-        let reach = elastomer::blend_reach_mm(config, sensor.finger.shell_thickness);
+        let reach = elastomer::blend_reach_mm(config);
         texel_rect = contact::footprint(sensor, &grid, &pose, &c.object, reach);
         if let Some(rect) = texel_rect {
             penetration = contact::penetration_field(sensor, &grid, &pose, &c.object, rect);

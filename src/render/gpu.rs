@@ -373,8 +373,7 @@ impl Renderer {
     fn prepare(&mut self, contact: &Contact, noise_seed: u32) -> Result<Prepared> {
         let sensor = &self.sensor;
         let pose = contact.pose(sensor)?;
-        let reach =
-            elastomer::blend_reach_mm(&sensor.config.elastomer, sensor.finger.shell_thickness);
+        let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
         let texel_rect = contact::footprint(sensor, &self.grid, &pose, &contact.object, reach);
         let pixel_rect = texel_rect.and_then(|r| pixel_rect(sensor, &self.grid, r));
         let max_depth = contact::max_trace_depth(&sensor.finger, pose.depth_mm);
@@ -421,6 +420,7 @@ impl Renderer {
                 &contact.object,
                 pose.coord,
                 max_depth,
+                sensor.config.elastomer.drape_mm,
                 contact::TRACE_EPSILON_MM,
             ),
         };

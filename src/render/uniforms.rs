@@ -78,7 +78,7 @@ impl SensorUniform {
         let c = &sensor.config;
         let lights = leds::leds(sensor);
         let f = &sensor.finger;
-        let reach = super::elastomer::blend_reach_mm(&c.elastomer, f.shell_thickness);
+        let reach = super::elastomer::blend_reach_mm(&c.elastomer);
         SensorUniform {
             radius: f.radius as f32,
             cylinder_length: f.cylinder_length as f32,
