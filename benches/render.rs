@@ -48,6 +48,7 @@ fn row(name: &str, frames: usize, wall: Duration, t: Timings) {
 }
 
 fn main() -> anyhow::Result<()> {
+    env_logger::init();
     let args: Vec<String> = std::env::args().collect();
     let frames: usize = args
         .iter()

@@ -4,7 +4,7 @@
 // Writes the G-buffer the LED stage shades. Mirror: src/render/camera.rs.
 
 const BISECTION_STEPS: u32 = 6u;
-const UNTOUCHED_PROBES: u32 = 5u;
+const UNTOUCHED_PROBES: u32 = 3u;
 
 fn height_at(c: vec2<f32>) -> f32 {
     let taps = bilinear_taps(texel_of(disc_of(c)));

@@ -94,7 +94,7 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     var h = clamp(pressed - sensor.bulge * max(v.y - v.x, 0.0), -0.5 * t, t);
     // Mirror: HEIGHT_EPSILON_MM. Gaussian tails are not a deformation; the camera marches
     // only where there is one.
-    if abs(h) < 1e-3 {
+    if abs(h) < 5e-3 {
         h = 0.0;
     }
     height[idx] = h;

@@ -13,7 +13,7 @@ use crate::sensor::Sensor;
 use glam::{DVec2, DVec3};
 
 /// Points along a ray's stretch of shell where the skin is probed before marching.
-pub const UNTOUCHED_PROBES: u32 = 5;
+pub const UNTOUCHED_PROBES: u32 = 3;
 
 /// Bisection steps after the march has bracketed the skin (then one secant step).
 pub const BISECTION_STEPS: u32 = 6;

@@ -9,7 +9,7 @@ use super::{ContactPose, HeightfieldGrid, Rect};
 use crate::finger::{Finger, SurfaceCoord};
 use crate::object::Object;
 use crate::sensor::Sensor;
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 
 /// Sphere-tracing steps before a texel is declared untouched.
 pub const MAX_TRACE_STEPS: u32 = 48;
@@ -64,65 +64,149 @@ pub fn parallel_radius(finger: &Finger, s: f64) -> f64 {
     }
 }
 
-/// Texels of the heightfield the object touches (conservatively), grown by `blend_mm` of
-/// surface distance for the elastomer's blur; `None` when the object touches nothing.
+/// What a contact can change: the heightfield texels its imprint (grown by the elastomer's
+/// reach) covers, and the pixels whose rays can meet them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Footprint {
+    pub texels: Rect,
+    pub pixels: Option<Rect>,
+}
+
+/// The pixel where the camera sees the direction of `p` (for points just outside the
+/// finger, such as a bulge, the direction is what matters), or `None` beyond the lens.
+fn pixel_towards(sensor: &Sensor, p: DVec3) -> Option<DVec2> {
+    let lateral = p.x.hypot(p.y);
+    let theta = lateral.atan2(p.z);
+    if theta > sensor.lens.max_theta {
+        return None;
+    }
+    let rho = sensor.lens.project(theta);
+    Some(if lateral > 0.0 {
+        sensor.principal + rho * DVec2::new(p.x, p.y) / lateral
+    } else {
+        sensor.principal
+    })
+}
+
+/// Where the object touches the finger (conservatively): coarse cells of 2x2 texels are
+/// traced with a tolerance of half their diagonal (the disc-to-surface map never stretches
+/// distances, so every surface point of a cell is that close to its centre); the boundary
+/// cells are grown by `blend_reach_mm` of surface distance, along the meridian and the
+/// parallel, and bounded on the disc (texels) and in the image, at every depth the skin can
+/// take (pixels). `None` when the object touches nothing.
 pub fn footprint(
     sensor: &Sensor,
     grid: &HeightfieldGrid,
     pose: &ContactPose,
     object: &Object,
     blend_reach_mm: f64,
-) -> Option<Rect> {
+) -> Option<Footprint> {
     let f = &sensor.finger;
     let max_depth = max_trace_depth(f, pose.depth_mm);
-    // Coarse cells of 2x2 texels; the disc-to-surface map never stretches distances, so every
-    // surface point in a cell lies within half its diagonal of the cell's centre.
     const CELL: u32 = 2;
     let cells = grid.texels.div_ceil(CELL);
     let cell_mm = grid.texel_mm() * CELL as f64;
     let tolerance = cell_mm * std::f64::consts::FRAC_1_SQRT_2 + TRACE_EPSILON_MM;
     let drape = sensor.config.elastomer.drape_mm;
     let reach = object.bounding_radius() + max_depth + drape + tolerance;
-    let mut lo = DVec2::splat(f64::INFINITY);
-    let mut hi = DVec2::splat(f64::NEG_INFINITY);
-    let mut s_hi: f64 = 0.0;
-    // Largest |cos phi| and |sin phi| over the footprint: the radial and tangential
-    // directions on the disc, along which the elastomer's kernels reach.
-    let mut trig = DVec2::ZERO;
+    let centre = |ci: u32, cj: u32| {
+        DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm - DVec2::splat(grid.half_size_mm)
+    };
+    let mut marked = vec![false; (cells * cells) as usize];
     for cj in 0..cells {
         for ci in 0..cells {
-            let disc = DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm
-                - DVec2::splat(grid.half_size_mm);
-            let coord = SurfaceCoord::from_disc(disc);
-            if coord.s > grid.half_size_mm {
+            let coord = SurfaceCoord::from_disc(centre(ci, cj));
+            if coord.s > grid.half_size_mm
+                || (f.point_at(coord).point - pose.origin).length() > reach
+            {
                 continue;
             }
-            if (f.point_at(coord).point - pose.origin).length() > reach {
+            marked[(cj * cells + ci) as usize] =
+                penetration(f, pose, object, coord, max_depth, drape, tolerance) > 0.0;
+        }
+    }
+    let is_marked = |ci: i64, cj: i64| {
+        ci >= 0
+            && cj >= 0
+            && ci < cells as i64
+            && cj < cells as i64
+            && marked[(cj * cells as i64 + ci) as usize]
+    };
+    // How far the imprint's influence reaches beyond a marked cell's centre (surface mm);
+    // a 10% margin covers the bounding box falling between the 8 sampled directions.
+    let grow = 1.1 * blend_reach_mm + cell_mm;
+    let (mut disc_lo, mut disc_hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    let (mut px_lo, mut px_hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    let depths = [
+        -0.5 * f.shell_thickness,
+        0.0,
+        0.5 * f.shell_thickness,
+        f.shell_thickness,
+    ];
+    for cj in 0..cells as i64 {
+        for ci in 0..cells as i64 {
+            if !is_marked(ci, cj) {
                 continue;
             }
-            if penetration(f, pose, object, coord, max_depth, drape, tolerance) > 0.0 {
-                let t = grid.texel_of(disc);
-                lo = lo.min(t);
-                hi = hi.max(t);
-                s_hi = s_hi.max(coord.s + cell_mm);
-                trig = trig.max(DVec2::new(coord.phi.cos().abs(), coord.phi.sin().abs()));
-                if coord.s <= cell_mm {
-                    trig = DVec2::ONE;
+            let interior = (-1..=1).all(|dj| (-1..=1).all(|di| is_marked(ci + di, cj + dj)));
+            if interior {
+                continue;
+            }
+            let c = SurfaceCoord::from_disc(centre(ci as u32, cj as u32));
+            let rho = parallel_radius(f, c.s);
+            let mut around: Vec<SurfaceCoord> = (0..8)
+                .map(|k| {
+                    let (sin, cos) = (k as f64 * std::f64::consts::FRAC_PI_4).sin_cos();
+                    SurfaceCoord {
+                        s: (c.s + grow * cos).max(0.0),
+                        phi: c.phi + grow * sin / rho.max(1e-9),
+                    }
+                })
+                .collect();
+            // Near the tip the parallels are too small for azimuth offsets: take the whole
+            // circle the grown cell can reach.
+            if c.s < 2.0 * grow {
+                around.extend((0..16).map(|k| SurfaceCoord {
+                    s: c.s + grow,
+                    phi: k as f64 * std::f64::consts::TAU / 16.0,
+                }));
+            }
+            around.push(c);
+            for p in around {
+                let disc = p.to_disc();
+                disc_lo = disc_lo.min(disc);
+                disc_hi = disc_hi.max(disc);
+                let sp = f.point_at(p);
+                for depth in depths {
+                    if let Some(px) = pixel_towards(sensor, sp.point - depth * sp.normal) {
+                        // Pixel centres are at integers: shift to cell space.
+                        px_lo = px_lo.min(px + DVec2::splat(0.5));
+                        px_hi = px_hi.max(px + DVec2::splat(0.5));
+                    }
                 }
             }
         }
     }
-    if lo.x > hi.x {
+    if disc_lo.x > disc_hi.x {
         return None;
     }
-    // Azimuthal surface distance maps to s / rho(s) times as much disc distance.
-    // A tangential step at azimuth phi moves along (-sin, cos) on the disc, a radial one
-    // along (cos, sin).
-    let stretch = (s_hi / parallel_radius(f, s_hi).max(1e-9)).max(1.0);
-    let pad = DVec2::new(stretch * trig.y + trig.x, stretch * trig.x + trig.y) * blend_reach_mm
-        / grid.texel_mm()
-        + DVec2::splat(CELL as f64);
-    Rect::covering(lo, hi, pad, (grid.texels, grid.texels))
+    let texels = Rect::covering(
+        grid.texel_of(disc_lo),
+        grid.texel_of(disc_hi),
+        DVec2::ONE,
+        (grid.texels, grid.texels),
+    )?;
+    let pixels = if px_lo.x > px_hi.x {
+        None
+    } else {
+        Rect::covering(
+            px_lo,
+            px_hi,
+            DVec2::splat(2.0),
+            (sensor.width, sensor.height),
+        )
+    };
+    Some(Footprint { texels, pixels })
 }
 
 /// The penetration field over `rect` of a `grid.texels`^2 heightfield (zero elsewhere).

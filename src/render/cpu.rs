@@ -1,7 +1,7 @@
 //! The whole pipeline on the CPU, stage by stage, from the CPU mirrors: slow (seconds per
 //! frame) but independent of any GPU, so tests can hold the GPU renderer to it.
 
-use super::{camera, contact, elastomer, leds, pixel_rect, Contact, Frame, HeightfieldGrid, Rect};
+use super::{camera, contact, elastomer, leds, Contact, Frame, HeightfieldGrid, Rect};
 use crate::error::Result;
 use crate::sensor::Sensor;
 use glam::DVec2;
@@ -23,15 +23,15 @@ pub struct CpuRender {
 pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
     let grid = HeightfieldGrid::for_sensor(sensor);
     let n = grid.texels as usize;
-    let (mut penetration, mut height, mut over, mut texel_rect) =
+    let (mut penetration, mut height, mut over, mut footprint) =
         (vec![0.0; n * n], vec![0.0; n * n], 0, None);
     let mut normals = vec![glam::DVec3::ZERO; n * n];
     if let Some(c) = contact {
         let pose = c.pose(sensor)?;
         let config = &sensor.config.elastomer;
         let reach = elastomer::blend_reach_mm(config);
-        texel_rect = contact::footprint(sensor, &grid, &pose, &c.object, reach);
-        if let Some(rect) = texel_rect {
+        footprint = contact::footprint(sensor, &grid, &pose, &c.object, reach);
+        if let Some(rect) = footprint.map(|f| f.texels) {
             penetration = contact::penetration_field(sensor, &grid, &pose, &c.object, rect);
             let meridian = elastomer::blend_meridian(&grid, config, reach, &penetration, rect);
             let (h, o) = elastomer::blend_azimuth(
@@ -79,7 +79,7 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
             indentation[i] = hit.indentation as f32;
         }
     }
-    let pixel_rect = texel_rect.and_then(|r| pixel_rect(sensor, &grid, r));
+
     Ok(CpuRender {
         frame: Frame {
             width: w,
@@ -90,7 +90,7 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
         height,
         penetration,
         over_pressed_texels: over,
-        texel_rect,
-        pixel_rect,
+        texel_rect: footprint.map(|f| f.texels),
+        pixel_rect: footprint.and_then(|f| f.pixels),
     })
 }

@@ -163,7 +163,7 @@ pub fn blend_azimuth(
 
 /// Displacements smaller than this (mm) are none: the Gaussians' tails would otherwise mark
 /// the whole footprint rectangle as touched, and the camera marches only where it is.
-pub const HEIGHT_EPSILON_MM: f64 = 1e-3;
+pub const HEIGHT_EPSILON_MM: f64 = 5e-3;
 
 /// The skin's inward displacement from the imprint p and its (narrow, wide) blends.
 pub fn skin_displacement(p: f64, blend: DVec2, thickness: f64, bulge: f64) -> f64 {

@@ -5,7 +5,7 @@
 //! output buffers, and read back together.
 
 use super::uniforms::{FrameUniform, SensorUniform};
-use super::{contact, elastomer, pixel_rect, Contact, Frame, GroundTruth, HeightfieldGrid, Rect};
+use super::{contact, elastomer, Contact, Frame, GroundTruth, HeightfieldGrid, Rect};
 use crate::error::{GeltipError, Result};
 use crate::gpu::readback::read_buffer;
 use crate::gpu::shaders::create_compute_pipeline;
@@ -374,8 +374,9 @@ impl Renderer {
         let sensor = &self.sensor;
         let pose = contact.pose(sensor)?;
         let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
-        let texel_rect = contact::footprint(sensor, &self.grid, &pose, &contact.object, reach);
-        let pixel_rect = texel_rect.and_then(|r| pixel_rect(sensor, &self.grid, r));
+        let footprint = contact::footprint(sensor, &self.grid, &pose, &contact.object, reach);
+        let texel_rect = footprint.map(|f| f.texels);
+        let pixel_rect = footprint.and_then(|f| f.pixels);
         let max_depth = contact::max_trace_depth(&sensor.finger, pose.depth_mm);
         if let Object::Mesh { grid, .. } = contact.object.as_ref() {
             let key = Arc::as_ptr(&contact.object) as usize;
