@@ -340,6 +340,14 @@ pub fn run(
     Ok(report)
 }
 
+/// One method's points on the chart: (position, mean, std) and the positions with misses.
+struct Series {
+    name: String,
+    colour: plotters::style::RGBColor,
+    points: Vec<(usize, f64, f64)>,
+    missed: Vec<usize>,
+}
+
 /// Error per position per method, with the paper's published numbers, as an SVG chart.
 pub fn chart_svg(report: &Report) -> Result<String> {
     use plotters::prelude::*;
@@ -348,16 +356,16 @@ pub fn chart_svg(report: &Report) -> Result<String> {
     {
         let root = SVGBackend::with_string(&mut svg, (900, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| chart_err(&e))?;
-        let mut series: Vec<(String, RGBColor, Vec<(usize, f64, f64)>, Vec<usize>)> = vec![(
-            "paper (published)".into(),
-            RGBColor(120, 120, 120),
-            PAPER_PER_POSITION
+        let mut series = vec![Series {
+            name: "paper (published)".into(),
+            colour: RGBColor(120, 120, 120),
+            points: PAPER_PER_POSITION
                 .iter()
                 .enumerate()
                 .map(|(i, (m, s))| (i, *m, *s))
                 .collect(),
-            vec![],
-        )];
+            missed: vec![],
+        }];
         let colours = [
             RGBColor(214, 39, 40),
             RGBColor(31, 119, 180),
@@ -375,21 +383,21 @@ pub fn chart_svg(report: &Report) -> Result<String> {
                     missed.push(p);
                 }
             }
-            series.push((
-                m.name().to_string(),
-                colours[k % colours.len()],
+            series.push(Series {
+                name: m.name().to_string(),
+                colour: colours[k % colours.len()],
                 points,
                 missed,
-            ));
+            });
         }
         let top = series
             .iter()
-            .flat_map(|s| s.2.iter().map(|(_, m, sd)| m + sd))
+            .flat_map(|s| s.points.iter().map(|(_, m, sd)| m + sd))
             .fold(1.0f64, f64::max)
             * 1.1;
         let mut chart = ChartBuilder::on(&root)
             .caption(
-                "Contact localisation error per tap position (mean ± std, mm)",
+                "Localisation error per tap position (mean ± std, mm; × = missed taps)",
                 ("sans-serif", 20),
             )
             .margin(12)
@@ -412,19 +420,19 @@ pub fn chart_svg(report: &Report) -> Result<String> {
             .draw()
             .map_err(|e| chart_err(&e))?;
         let n = series.len() as f64;
-        for (k, (name, colour, points, missed)) in series.iter().enumerate() {
+        for (k, line) in series.iter().enumerate() {
             let dx = (k as f64 - (n - 1.0) / 2.0) * 0.18;
-            let c = *colour;
+            let c = line.colour;
             chart
-                .draw_series(points.iter().map(|&(p, m, s)| {
+                .draw_series(line.points.iter().map(|&(p, m, s)| {
                     ErrorBar::new_vertical(p as f64 + dx, (m - s).max(0.0), m, m + s, c.filled(), 6)
                 }))
                 .map_err(|e| chart_err(&e))?
-                .label(name.clone())
+                .label(line.name.clone())
                 .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
             chart
                 .draw_series(
-                    missed
+                    line.missed
                         .iter()
                         .map(|&p| Cross::new((p as f64 + dx, top * 0.02), 6, c.stroke_width(2))),
                 )

@@ -57,16 +57,14 @@ struct Diff {
     mean_abs: f64,
     /// Fraction of channel values that differ by more than `loose` levels.
     frac_over: f64,
-    max_abs: u8,
 }
 
 fn diff(a: &[u8], b: &[u8], loose: u8) -> Diff {
     assert_eq!(a.len(), b.len());
-    let (mut sum, mut over, mut max) = (0u64, 0u64, 0u8);
+    let (mut sum, mut over) = (0u64, 0u64);
     for (x, y) in a.iter().zip(b) {
         let d = x.abs_diff(*y);
         sum += d as u64;
-        max = max.max(d);
         if d > loose {
             over += 1;
         }
@@ -74,7 +72,6 @@ fn diff(a: &[u8], b: &[u8], loose: u8) -> Diff {
     Diff {
         mean_abs: sum as f64 / a.len() as f64,
         frac_over: over as f64 / a.len() as f64,
-        max_abs: max,
     }
 }
 
