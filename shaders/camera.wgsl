@@ -4,7 +4,42 @@
 // Writes the G-buffer the LED stage shades. Mirror: src/render/camera.rs.
 
 const BISECTION_STEPS: u32 = 6u;
-const UNTOUCHED_PROBES: u32 = 3u;
+// Vec4s per pixel in the G-buffer: (skin point, indentation), (ray, flag), (normal, -), and,
+// written once by the reference frame, the disc positions of the ray's three probes.
+const GBUFFER_STRIDE: u32 = 5u;
+
+// Where a ray's stretch of shell is probed for deformation: its ends and middle, as disc
+// positions. Mirror: src/render/camera.rs UNTOUCHED_PROBES.
+struct Probes {
+    a: vec2<f32>,
+    b: vec2<f32>,
+    c: vec2<f32>,
+}
+
+fn ray_probes(dir: vec3<f32>) -> Probes {
+    let t_in = capsule_hit(dir, -sensor.shell_thickness);
+    let t_out = capsule_hit(dir, 0.5 * sensor.shell_thickness);
+    return Probes(
+        disc_of_point(t_in * dir),
+        disc_of_point(0.5 * (t_in + t_out) * dir),
+        disc_of_point(t_out * dir),
+    );
+}
+
+fn height_at_disc(u: vec2<f32>) -> f32 {
+    let taps = bilinear_taps(texel_of(u));
+    var v = 0.0;
+    for (var k = 0; k < 4; k++) {
+        if taps.index[k] >= 0 {
+            v += taps.weight[k] * height[taps.index[k]];
+        }
+    }
+    return v;
+}
+
+fn probes_untouched(p: Probes) -> bool {
+    return height_at_disc(p.a) == 0.0 && height_at_disc(p.b) == 0.0 && height_at_disc(p.c) == 0.0;
+}
 
 fn height_at(c: vec2<f32>) -> f32 {
     let taps = bilinear_taps(texel_of(disc_of(c)));
@@ -74,7 +109,7 @@ fn skin_normal(c: vec2<f32>) -> vec3<f32> {
 // How far inside the gel the ray point at t is: positive in the gel, negative past the skin.
 fn gap(t: f32, dir: vec3<f32>) -> f32 {
     let q = t * dir;
-    return -finger_signed_distance(q) - height_at(coord_of(q));
+    return -finger_signed_distance(q) - height_at_disc(disc_of_point(q));
 }
 
 struct SkinHit {
@@ -102,15 +137,11 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
     var t_hit = capsule_hit(dir, 0.0);
     // Most rays cross untouched skin: then the skin is the surface itself, exactly, with no
     // march (the reference frame is all such rays, so a frame's untouched pixels match it).
-    var steps = 0u;
-    for (var k = 0u; k < UNTOUCHED_PROBES; k++) {
-        let t = t_in + (t_out - t_in) * f32(k) / f32(UNTOUCHED_PROBES - 1u);
-        if height_at(coord_of(t * dir)) != 0.0 {
-            steps = sensor.ray_steps;
-            break;
-        }
+    hit.untouched = probes_untouched(ray_probes(dir));
+    var steps = sensor.ray_steps;
+    if hit.untouched {
+        steps = 0u;
     }
-    hit.untouched = steps == 0u;
     var t_prev = t_in;
     for (var k = 1u; k <= steps; k++) {
         let t = t_in + (t_out - t_in) * f32(k) / f32(sensor.ray_steps);
@@ -146,25 +177,46 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let x = frame.pixel_rect.x + id.x;
     let y = frame.pixel_rect.y + id.y;
-    let i = y * sensor.image_size.x + x;
+    let base = GBUFFER_STRIDE * (y * sensor.image_size.x + x);
+    let reference = frame.object_kind == REFERENCE_FRAME;
+    if !reference {
+        // The reference frame left this pixel's probe positions: most pixels of a contact's
+        // rectangle need nothing more to know they keep the reference's colour.
+        let p0 = gbuffer[base + 3u];
+        let p1 = gbuffer[base + 4u];
+        if p1.z == 0.0 || probes_untouched(Probes(p0.xy, p0.zw, p1.xy)) {
+            gbuffer[base + 1u] = vec4<f32>(0.0, 0.0, 0.0, 2.0);
+            return;
+        }
+    }
     let hit = cast_ray(vec2<f32>(f32(x), f32(y)));
-    gbuffer[3u * i] = vec4<f32>(hit.point, hit.indentation);
+    gbuffer[base] = vec4<f32>(hit.point, hit.indentation);
     // w: 0 = no ray, 1 = shade, 2 = untouched (keep the reference's pixel).
-    gbuffer[3u * i + 1u] = vec4<f32>(hit.ray, select(0.0, select(1.0, 2.0, hit.untouched), hit.valid));
-    gbuffer[3u * i + 2u] = vec4<f32>(hit.normal, 0.0);
+    gbuffer[base + 1u] = vec4<f32>(hit.ray, select(0.0, select(1.0, 2.0, hit.untouched), hit.valid));
+    gbuffer[base + 2u] = vec4<f32>(hit.normal, 0.0);
+    if reference {
+        if hit.valid {
+            let p = ray_probes(hit.ray);
+            gbuffer[base + 3u] = vec4<f32>(p.a, p.b);
+            gbuffer[base + 4u] = vec4<f32>(p.c, 1.0, 0.0);
+        } else {
+            gbuffer[base + 4u] = vec4<f32>(0.0);
+        }
+    }
 }
 
-// For tests: the undeformed surface point each listed pixel sees. Input: gbuffer[i].xy is a
-// pixel, for i < frame.pixel_rect.z; output: gbuffer[i] = (point, 1) or (0, 0, 0, 0).
+// For tests: the undeformed surface point each listed pixel sees. Input:
+// elastomer_scratch[i].xy is a pixel, for i < frame.pixel_rect.z; output: (point, 1), or 0
+// beyond the lens. (Not the G-buffer: it keeps the reference frame's probe positions.)
 @compute @workgroup_size(64)
 fn unproject_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= frame.pixel_rect.z {
         return;
     }
-    let ray = pixel_ray(gbuffer[id.x].xy);
+    let ray = pixel_ray(elastomer_scratch[id.x].xy);
     if ray.w == 0.0 {
-        gbuffer[id.x] = vec4<f32>(0.0);
+        elastomer_scratch[id.x] = vec4<f32>(0.0);
         return;
     }
-    gbuffer[id.x] = vec4<f32>(capsule_hit(ray.xyz, 0.0) * ray.xyz, 1.0);
+    elastomer_scratch[id.x] = vec4<f32>(capsule_hit(ray.xyz, 0.0) * ray.xyz, 1.0);
 }

@@ -50,8 +50,9 @@ fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
     let x = frame.pixel_rect.x + id.x;
     let y = frame.pixel_rect.y + id.y;
     let i = y * sensor.image_size.x + x;
-    let g0 = gbuffer[3u * i];
-    let g1 = gbuffer[3u * i + 1u];
+    // Stride: camera.wgsl GBUFFER_STRIDE.
+    let g0 = gbuffer[5u * i];
+    let g1 = gbuffer[5u * i + 1u];
     // Untouched skin in a contact frame: the pixel copied from the reference stays.
     if g1.w == 2.0 && frame.object_kind != REFERENCE_FRAME {
         return;
@@ -61,7 +62,7 @@ fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
         indentation[i] = 0.0;
         return;
     }
-    let colour = shade(g0.xyz, gbuffer[3u * i + 2u].xyz, g1.xyz);
+    let colour = shade(g0.xyz, gbuffer[5u * i + 2u].xyz, g1.xyz);
     image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
     indentation[i] = g0.w;
 }

@@ -132,15 +132,22 @@ impl Summary {
         }
     }
 
-    /// "mean ± std", with the missed count when there is one; "all missed" when nothing was.
+    /// "mean ± std", with how many were found when some were missed; "all N missed" when
+    /// nothing was found.
     pub fn cell(&self) -> String {
-        let mut s = if self.detected == 0 {
-            "all missed".to_string()
-        } else {
-            format!("{:.2} ± {:.2}", self.mean, self.std)
+        let mut s = match self.detected {
+            0 => return format!("all {} missed", self.missed),
+            // One tap has no spread to speak of.
+            1 => format!("{:.2}", self.mean),
+            _ => format!("{:.2} ± {:.2}", self.mean, self.std),
         };
-        if self.missed > 0 && self.detected > 0 {
-            let _ = write!(s, " ({} missed)", self.missed);
+        if self.missed > 0 {
+            let _ = write!(
+                s,
+                " ({} of {} found)",
+                self.detected,
+                self.detected + self.missed
+            );
         }
         s
     }
@@ -384,7 +391,7 @@ pub fn chart_svg(report: &Report) -> Result<String> {
                 }
             }
             series.push(Series {
-                name: m.name().to_string(),
+                name: format!("{} detector (geltip)", m.name()),
                 colour: colours[k % colours.len()],
                 points,
                 missed,

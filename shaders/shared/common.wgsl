@@ -88,8 +88,8 @@ const REFERENCE_FRAME: u32 = 101u;
 @group(0) @binding(3) var<storage, read_write> elastomer_scratch: array<vec4<f32>>;
 // Stage 2 output: the skin's inward displacement, per texel.
 @group(0) @binding(4) var<storage, read_write> height: array<f32>;
-// Stage 3 output, two per pixel: (skin point, indentation), (ray direction, hit flag),
-// and the skin normal in a third.
+// Stage 3 output, five vec4 per pixel: (skin point, indentation), (ray direction, flag),
+// (skin normal, -), and the ray's probe positions written by the reference frame.
 @group(0) @binding(5) var<storage, read_write> gbuffer: array<vec4<f32>>;
 // Stage 4 output: packed RGBA8 per pixel.
 @group(0) @binding(6) var<storage, read_write> image: array<u32>;
@@ -202,6 +202,22 @@ fn coord_of(p: vec3<f32>) -> vec2<f32> {
         return vec2<f32>(sensor.radius * atan2(lateral, p.z - sensor.cylinder_length), phi);
     }
     return vec2<f32>(sensor.junction_s + (sensor.cylinder_length - p.z), phi);
+}
+
+// disc_of(coord_of(p)) without the azimuth's atan2, cos and sin: (cos phi, sin phi) is
+// p.xy / |p.xy| (on the axis the disc position is 0 above the junction; below it phi = 0).
+fn disc_of_point(p: vec3<f32>) -> vec2<f32> {
+    let lateral = length(p.xy);
+    var s: f32;
+    if p.z > sensor.cylinder_length {
+        s = sensor.radius * atan2(lateral, p.z - sensor.cylinder_length);
+    } else {
+        s = sensor.junction_s + (sensor.cylinder_length - p.z);
+    }
+    if lateral == 0.0 {
+        return vec2<f32>(s, 0.0);
+    }
+    return s * p.xy / lateral;
 }
 
 // Surface point at coordinates (s, phi).

@@ -79,6 +79,9 @@ pub struct Renderer {
 
 const COUNTER_SLOT: u64 = 256;
 
+/// Five vec4 per pixel (camera.wgsl `GBUFFER_STRIDE`).
+const GBUFFER_BYTES_PER_PIXEL: u64 = 5 * 16;
+
 fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -117,7 +120,7 @@ impl Renderer {
         let pixels = sensor.width as u64 * sensor.height as u64;
         let slot_bytes = (pixels * 4).next_multiple_of(256);
         let limits = ctx.device.limits();
-        let largest = (pixels * 48).max(slot_bytes * MAX_BATCH as u64);
+        let largest = (pixels * GBUFFER_BYTES_PER_PIXEL).max(slot_bytes * MAX_BATCH as u64);
         if largest > limits.max_storage_buffer_binding_size || largest > limits.max_buffer_size {
             return Err(GeltipError::input(
                 "image",
@@ -188,7 +191,12 @@ impl Renderer {
             penetration: storage(ctx, "geltip penetration", texels * 4, none),
             elastomer_scratch: storage(ctx, "geltip elastomer scratch", texels * 16, none),
             height: storage(ctx, "geltip height", texels * 4, none),
-            gbuffer: storage(ctx, "geltip gbuffer", pixels * 48, none),
+            gbuffer: storage(
+                ctx,
+                "geltip gbuffer",
+                pixels * GBUFFER_BYTES_PER_PIXEL,
+                none,
+            ),
             image: storage(ctx, "geltip image", slot_bytes * MAX_BATCH as u64, none),
             indentation: storage(
                 ctx,
@@ -627,7 +635,7 @@ impl Renderer {
     /// The undeformed surface points the GPU's lens rays meet for `pixels` (None beyond the
     /// lens): the GPU half of the CPU/GPU projection comparison.
     pub fn unproject_pixels(&mut self, pixels: &[glam::DVec2]) -> Result<Vec<Option<glam::DVec3>>> {
-        let max = (self.sensor.width as usize * self.sensor.height as usize) * 3;
+        let max = (self.grid.texels as usize).pow(2);
         if pixels.len() > max {
             return Err(GeltipError::input(
                 "unproject_pixels",
@@ -640,7 +648,7 @@ impl Renderer {
             .collect();
         self.ctx
             .queue
-            .write_buffer(&self.gbuffer, 0, bytemuck::cast_slice(&input));
+            .write_buffer(&self.elastomer_scratch, 0, bytemuck::cast_slice(&input));
         let mut uniform = FrameUniform::reference(&self.sensor, 0);
         uniform.pixel_rect = [0, 0, pixels.len() as u32, 1];
         let ub = self.uniform_buffer(&uniform);
@@ -653,7 +661,7 @@ impl Renderer {
             (groups(pixels.len() as u32, 64), 1),
         );
         self.ctx.submit_and_wait("unprojecting pixels", encoder)?;
-        let out: Vec<[f32; 4]> = read_buffer(self.ctx, &self.gbuffer, 0, pixels.len())?;
+        let out: Vec<[f32; 4]> = read_buffer(self.ctx, &self.elastomer_scratch, 0, pixels.len())?;
         Ok(out
             .into_iter()
             .map(|v| (v[3] != 0.0).then(|| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)))

@@ -1,0 +1,258 @@
+//! The `geltip` binary as external scripts use it: exact JSON shapes, exit codes and
+//! one-line errors.
+
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn geltip(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_geltip"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn json(stdout: &str) -> Value {
+    serde_json::from_str(stdout.trim())
+        .unwrap_or_else(|e| panic!("not one JSON object ({e}): {stdout}"))
+}
+
+/// The error line geltip printed (Mesa may print its own lines around it).
+fn error_line(stderr: &str) -> &str {
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("error: ") && !l.contains("XDG_RUNTIME_DIR"))
+        .collect();
+    assert_eq!(lines.len(), 1, "expected one error line, got: {stderr}");
+    lines[0]
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("geltip-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn sensors_lists_the_presets() {
+    let (code, out, _) = geltip(&["sensors"]);
+    assert_eq!(code, 0);
+    for name in ["paper", "webcam70", "tube13", "tube21"] {
+        assert!(out.contains(name), "{out}");
+    }
+}
+
+#[test]
+fn unproject_and_project() {
+    let (code, out, _) = geltip(&["unproject", "--sensor", "paper", "320", "240"]);
+    assert_eq!(code, 0);
+    let v = json(&out);
+    assert_eq!(v["region"], "hemisphere");
+    let p: Vec<f64> = v["point"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!((p[2] - 27.5).abs() < 1e-9 && p[0].abs() < 1e-9, "{out}");
+    assert_eq!(v["normal"].as_array().unwrap().len(), 3);
+    assert_eq!(v.as_object().unwrap().len(), 3);
+
+    let (_, out, _) = geltip(&["unproject", "--sensor", "paper", "580", "240"]);
+    assert_eq!(json(&out)["region"], "cylinder");
+    let (_, out, _) = geltip(&["unproject", "--sensor", "paper", "0", "0"]);
+    assert_eq!(out.trim(), r#"{"region":"none"}"#);
+
+    let (code, out, _) = geltip(&["project", "--sensor", "paper", "0", "0", "27.5"]);
+    assert_eq!(code, 0);
+    assert_eq!(json(&out)["pixel"], serde_json::json!([320.0, 240.0]));
+    // Negative coordinates are numbers, not flags.
+    let (code, out, _) = geltip(&["project", "--sensor", "paper", "-7.5", "0", "10"]);
+    assert_eq!(code, 0, "{out}");
+    assert!(json(&out)["pixel"].is_array());
+    let (_, out, _) = geltip(&["project", "--sensor", "paper", "0", "0", "40"]);
+    let v = json(&out);
+    assert!(
+        v["pixel"].is_null() && v["reason"].as_str().unwrap().contains("outside the finger"),
+        "{out}"
+    );
+}
+
+#[test]
+fn bad_sensor_files_are_one_line_errors_naming_the_field() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/sensors/paper.toml"
+    ))
+    .unwrap();
+    let path = temp("bad.toml");
+    std::fs::write(&path, text.replace("radius_mm = 7.5", "radius_mm = 0.0")).unwrap();
+    let (code, out, err) = geltip(&["unproject", "--sensor", path.to_str().unwrap(), "1", "1"]);
+    assert_eq!(code, 1);
+    assert!(out.is_empty());
+    assert!(error_line(&err).contains("finger.radius_mm"), "{err}");
+    let (code, _, err) = geltip(&["sensors-typo"]);
+    assert_ne!(code, 0);
+    assert!(!err.is_empty());
+    let (code, _, err) = geltip(&["project", "--sensor", "nope", "0", "0", "1"]);
+    assert_eq!(code, 1);
+    assert!(error_line(&err).contains("unknown sensor 'nope'"), "{err}");
+}
+
+#[test]
+fn render_localise_round_trip() {
+    let reference = temp("ref.png");
+    let image = temp("sphere.png");
+    let labels = temp("sphere.json");
+    let depth = temp("sphere.npy");
+    let (code, _, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--reference",
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--object",
+        "sphere",
+        "--at",
+        "rotation=45",
+        "--azimuth",
+        "-30",
+        "--depth",
+        "1",
+        "-o",
+        image.to_str().unwrap(),
+        "--labels",
+        labels.to_str().unwrap(),
+        "--depth-map",
+        depth.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let truth = json(&out);
+    let on_disk: Value = serde_json::from_str(&std::fs::read_to_string(&labels).unwrap()).unwrap();
+    assert_eq!(truth, on_disk);
+    for key in ["object", "point", "pixel", "normal", "depth_mm", "region"] {
+        assert!(!truth[key].is_null(), "labels lack {key}");
+    }
+    assert!(std::fs::read(&depth).unwrap().starts_with(b"\x93NUMPY"));
+    let (code, out, err) = geltip(&[
+        "localise",
+        "--sensor",
+        "paper",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--method",
+        "surface",
+        image.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let d = json(&out);
+    assert_eq!(d["detected"], true);
+    let p: Vec<f64> = d["point"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let t: Vec<f64> = truth["point"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let err_mm = ((p[0] - t[0]).powi(2) + (p[1] - t[1]).powi(2) + (p[2] - t[2]).powi(2)).sqrt();
+    assert!(err_mm < 0.5, "{err_mm} mm");
+    // The reference against itself: no contact, not an error.
+    let (code, out, _) = geltip(&[
+        "localise",
+        "--sensor",
+        "paper",
+        "--reference",
+        reference.to_str().unwrap(),
+        reference.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0);
+    assert_eq!(json(&out)["detected"], false);
+}
+
+#[test]
+fn bad_render_and_localise_input() {
+    let out_png = temp("never.png");
+    for (args, needle) in [
+        (
+            vec!["--object", "sphere", "--at", "rotation=x", "--depth", "1"],
+            "--at",
+        ),
+        (
+            vec![
+                "--object",
+                "sphere",
+                "--at",
+                "translation=99",
+                "--depth",
+                "1",
+            ],
+            "--at",
+        ),
+        (
+            vec!["--object", "sphere", "--at", "rotation=10", "--depth", "-1"],
+            "--depth",
+        ),
+        (
+            vec![
+                "--object",
+                "no-such.obj",
+                "--at",
+                "rotation=10",
+                "--depth",
+                "1",
+            ],
+            "no-such.obj",
+        ),
+        (
+            vec!["--object", "pyramid", "--at", "rotation=10", "--depth", "1"],
+            "pyramid",
+        ),
+    ] {
+        let mut all = vec!["render", "--sensor", "paper"];
+        all.extend(args);
+        all.extend(["-o", out_png.to_str().unwrap()]);
+        let (code, _, err) = geltip(&all);
+        assert_eq!(code, 1, "{all:?}");
+        assert!(error_line(&err).contains(needle), "{all:?}: {err}");
+        assert!(!out_png.exists(), "a failed render left a file");
+    }
+    let small = temp("small.png");
+    image::RgbImage::new(10, 10).save(&small).unwrap();
+    let (code, _, err) = geltip(&[
+        "localise",
+        "--sensor",
+        "paper",
+        "--reference",
+        small.to_str().unwrap(),
+        small.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(error_line(&err).contains("10x10"), "{err}");
+    let (code, _, err) = geltip(&[
+        "localise",
+        "--sensor",
+        "paper",
+        "--reference",
+        "/nonexistent.png",
+        small.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    assert!(error_line(&err).contains("/nonexistent.png"), "{err}");
+}
