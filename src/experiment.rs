@@ -278,7 +278,8 @@ pub fn run(
     }
     let mut renderer = Renderer::new(sensor)?;
     let localiser = Localiser::new(sensor);
-    let reference = renderer.reference().to_rgb();
+    // The frame detectors subtract: with sensor noise, a noisy one of its own.
+    let reference = renderer.render_empty()?.to_rgb();
     if let Some(dir) = out {
         output::write_png_rgb8(
             dir.join("reference.png"),

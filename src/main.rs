@@ -201,8 +201,8 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let sensor = Sensor::load(&sensor)?;
             if reference {
-                let renderer = Renderer::new(&sensor)?;
-                write_frame(renderer.reference(), &png, depth_map.as_ref())?;
+                let mut renderer = Renderer::new(&sensor)?;
+                write_frame(&renderer.render_empty()?, &png, depth_map.as_ref())?;
                 println!("{}", json!({ "image": png, "reference": true }));
                 return Ok(());
             }

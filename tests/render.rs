@@ -365,6 +365,18 @@ fn noise_is_seeded() {
         d.mean_abs > 0.5 && d.mean_abs < 3.0,
         "noise of 2 levels: {d:?}"
     );
+    // An empty frame has noise too, fresh each time, and nothing else.
+    let (e1, e2) = (a.render_empty().unwrap(), a.render_empty().unwrap());
+    assert_ne!(e1.rgba, e2.rgba);
+    let d = diff(&rgb(&e1), &rgb(a.reference()), 0);
+    assert!(
+        d.mean_abs > 0.5 && d.mean_abs < 3.0,
+        "empty frame noise: {d:?}"
+    );
+    // Without noise, the empty frame is the reference itself.
+    let mut quiet = paper();
+    let empty = quiet.render_empty().unwrap();
+    assert_eq!(&empty, quiet.reference());
 }
 
 #[test]

@@ -442,6 +442,44 @@ impl Renderer {
         })
     }
 
+    /// A frame with no contact, as the camera would take it: the cached reference, with
+    /// fresh sensor noise when the sensor has noise (each call draws new noise, like a real
+    /// reference frame; without noise it is the reference itself).
+    pub fn render_empty(&mut self) -> Result<Frame> {
+        if self.sensor.config.render.noise <= 0.0 {
+            return Ok(self.reference.clone());
+        }
+        self.seed_counter = self.seed_counter.wrapping_add(1);
+        let seed =
+            self.sensor.config.render.noise_seed ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
+        let uniform = self.uniform_buffer(&FrameUniform::reference(&self.sensor, seed));
+        let bind = self.bind_group(&uniform, 0, None);
+        let (w, h) = (self.sensor.width, self.sensor.height);
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(
+            &self.reference_image,
+            0,
+            &self.image,
+            0,
+            Some(self.slot_bytes),
+        );
+        Self::dispatch(
+            &mut encoder,
+            &self.pipelines.add_noise,
+            &bind,
+            (groups(w, 8), groups(h, 8)),
+        );
+        self.ctx
+            .submit_and_wait("rendering an empty frame", encoder)?;
+        let packed: Vec<u32> = read_buffer(self.ctx, &self.image, 0, (w * h) as usize)?;
+        Ok(Frame {
+            width: w,
+            height: h,
+            rgba: bytemuck::cast_slice(&packed).to_vec(),
+            indentation: vec![0.0; (w * h) as usize],
+        })
+    }
+
     /// Renders one contact.
     pub fn render(&mut self, contact: &Contact) -> Result<(Frame, GroundTruth)> {
         let mut out = self.render_batch(std::slice::from_ref(contact))?;
