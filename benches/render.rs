@@ -6,33 +6,20 @@
 //! sensor), one contact per submission, and batches of contacts per submission; each split
 //! into CPU preparation, GPU render (submit + wait) and readback (copy, map, unpack).
 
-use geltip::object::{Object, Solid};
+use geltip::experiment::{self, Protocol};
+use geltip::object::Solid;
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
-use geltip::render::{Contact, Place};
+use geltip::render::Contact;
 use geltip::sensor::Sensor;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+/// `n` contacts: the paper's 56 taps (seven solids at its eight positions), over and over.
 fn contacts(n: usize) -> Vec<Contact> {
-    let places = [
-        Place::Rotation(0.0),
-        Place::Rotation(30.0),
-        Place::Rotation(45.0),
-        Place::Rotation(60.0),
-        Place::Translation(0.0),
-        Place::Translation(5.0),
-        Place::Translation(10.0),
-        Place::Translation(15.0),
-    ];
-    (0..n)
-        .map(|i| Contact {
-            object: Arc::new(Object::Solid(Solid::ALL[i % Solid::ALL.len()])),
-            place: places[i % places.len()],
-            azimuth_deg: (i * 37 % 360) as f64,
-            spin_deg: 0.0,
-            depth_mm: 1.0,
-        })
-        .collect()
+    let all: Vec<Contact> = Solid::ALL
+        .iter()
+        .flat_map(|&s| experiment::taps(s, &Protocol::default()))
+        .collect();
+    all.iter().cycle().take(n).cloned().collect()
 }
 
 fn row(name: &str, frames: usize, wall: Duration, t: Timings) {

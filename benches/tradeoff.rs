@@ -7,34 +7,19 @@
 //! the mean absolute difference of the 8-bit channels inside the re-rendered region, and the
 //! mean error of the indentation map (mm) where either render is pressed.
 
-use geltip::object::{Object, Solid};
+use geltip::experiment::{self, Protocol};
+use geltip::object::Solid;
 use geltip::render::gpu::Renderer;
-use geltip::render::{Contact, Frame, Place};
+use geltip::render::{Contact, Frame};
 use geltip::sensor::Sensor;
 use plotters::prelude::*;
-use std::sync::Arc;
 use std::time::Instant;
 
+/// One contact per tap position of the paper, each with another of the seven solids.
 fn contacts() -> Vec<Contact> {
-    let places = [
-        Place::Rotation(0.0),
-        Place::Rotation(30.0),
-        Place::Rotation(45.0),
-        Place::Rotation(60.0),
-        Place::Translation(0.0),
-        Place::Translation(5.0),
-        Place::Translation(10.0),
-        Place::Translation(15.0),
-    ];
-    places
-        .iter()
-        .enumerate()
-        .map(|(i, &place)| Contact {
-            object: Arc::new(Object::Solid(Solid::ALL[i % Solid::ALL.len()])),
-            place,
-            azimuth_deg: 20.0 + 40.0 * i as f64,
-            spin_deg: 0.0,
-            depth_mm: 1.0,
+    (0..experiment::POSITIONS.len())
+        .map(|i| {
+            experiment::taps(Solid::ALL[i % Solid::ALL.len()], &Protocol::default())[i].clone()
         })
         .collect()
 }

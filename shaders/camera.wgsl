@@ -42,14 +42,7 @@ fn probes_untouched(p: Probes) -> bool {
 }
 
 fn height_at(c: vec2<f32>) -> f32 {
-    let taps = bilinear_taps(texel_of(disc_of(c)));
-    var v = 0.0;
-    for (var k = 0; k < 4; k++) {
-        if taps.index[k] >= 0 {
-            v += taps.weight[k] * height[taps.index[k]];
-        }
-    }
-    return v;
+    return height_at_disc(disc_of(c));
 }
 
 fn skin_at(u: vec2<f32>) -> vec3<f32> {

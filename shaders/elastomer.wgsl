@@ -78,11 +78,16 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
         let step = sensor.reach_mm / f32(taps);
         var acc = vec2<f32>(0.0);
         var norm = vec2<f32>(0.0);
+        // Walk the parallel by rotating the disc position one tap at a time (one sine and
+        // cosine per texel instead of per tap).
+        let turn = vec2<f32>(cos(step / rho), sin(step / rho));
+        var u = disc_of(vec2<f32>(c.x, c.y - f32(taps) * step / rho));
         for (var k = -taps; k <= taps; k++) {
             let x = f32(k) * step;
             let w = blend_weights(k, x);
-            acc += w * sample_meridian(texel_of(disc_of(vec2<f32>(c.x, c.y + x / rho))));
+            acc += w * sample_meridian(texel_of(u));
             norm += w;
+            u = vec2<f32>(u.x * turn.x - u.y * turn.y, u.x * turn.y + u.y * turn.x);
         }
         v = acc / norm;
     }

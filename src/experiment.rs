@@ -161,64 +161,60 @@ impl Report {
 
     /// The two tables of the paper, ours beside theirs, as Markdown.
     pub fn tables_markdown(&self) -> String {
-        let mut md = String::new();
-        let _ = writeln!(
-            md,
-            "Sensor `{}`, taps {} mm deep at azimuth {}°; error = distance (mm) between the predicted and the true contact point, mean ± sample std over the detected taps; missed taps are counted, not averaged in.\n",
+        let mut md = format!(
+            "Sensor `{}`, taps {} mm deep at azimuth {}°; error = distance (mm) between the predicted and the true contact point, mean ± sample std over the detected taps; missed taps are counted, not averaged in.\n\n",
             self.sensor, self.protocol.depth_mm, self.protocol.azimuth_deg
         );
-        let _ = writeln!(md, "**Contact errors per position (mm)**\n");
-        let head: Vec<&str> = POSITIONS.iter().map(|(_, l)| *l).collect();
-        let _ = writeln!(md, "| method | {} | all |", head.join(" | "));
-        let _ = writeln!(md, "|---|{}---|", "---|".repeat(POSITIONS.len()));
-        let paper: Vec<String> = PAPER_PER_POSITION
-            .iter()
-            .map(|(m, s)| format!("{m:.2} ± {s:.2}"))
-            .collect();
-        let _ = writeln!(
-            md,
-            "| paper (published, real sensor) | {} | ~5 |",
-            paper.join(" | ")
+        let positions: Vec<&str> = POSITIONS.iter().map(|(_, l)| *l).collect();
+        self.table(
+            &mut md,
+            "position",
+            &positions,
+            &PAPER_PER_POSITION,
+            |t, i| t.position == i,
         );
-        for &m in &self.protocol.methods {
-            let cells: Vec<String> = (0..POSITIONS.len())
-                .map(|p| self.summary(m, |t| t.position == p).cell())
-                .collect();
-            let _ = writeln!(
-                md,
-                "| {} (geltip) | {} | {} |",
-                m.name(),
-                cells.join(" | "),
-                self.summary(m, |_| true).cell()
-            );
-        }
-        let _ = writeln!(md, "\n**Contact errors per object (mm)**\n");
-        let head: Vec<&str> = Solid::ALL.iter().map(|s| s.name()).collect();
-        let _ = writeln!(md, "| method | {} | all |", head.join(" | "));
-        let _ = writeln!(md, "|---|{}---|", "---|".repeat(Solid::ALL.len()));
-        let paper: Vec<String> = PAPER_PER_OBJECT
-            .iter()
-            .map(|(m, s)| format!("{m:.2} ± {s:.2}"))
-            .collect();
-        let _ = writeln!(
-            md,
-            "| paper (published, real sensor) | {} | ~5 |",
-            paper.join(" | ")
-        );
-        for &m in &self.protocol.methods {
-            let cells: Vec<String> = Solid::ALL
-                .iter()
-                .map(|&o| self.summary(m, |t| t.object == o).cell())
-                .collect();
-            let _ = writeln!(
-                md,
-                "| {} (geltip) | {} | {} |",
-                m.name(),
-                cells.join(" | "),
-                self.summary(m, |_| true).cell()
-            );
-        }
+        md.push('\n');
+        let objects: Vec<&str> = Solid::ALL.iter().map(|s| s.name()).collect();
+        self.table(&mut md, "object", &objects, &PAPER_PER_OBJECT, |t, i| {
+            t.object == Solid::ALL[i]
+        });
         md
+    }
+
+    /// One table: a column per entry of `columns` (taps in column i are those `in_column`
+    /// says), the paper's published row, then a row per method.
+    fn table(
+        &self,
+        md: &mut String,
+        per: &str,
+        columns: &[&str],
+        paper: &[(f64, f64)],
+        in_column: impl Fn(&TapResult, usize) -> bool,
+    ) {
+        let _ = writeln!(md, "**Contact errors per {per} (mm)**\n");
+        let _ = writeln!(md, "| method | {} | all |", columns.join(" | "));
+        let _ = writeln!(md, "|---|{}---|", "---|".repeat(columns.len()));
+        let published: Vec<String> = paper
+            .iter()
+            .map(|(m, s)| format!("{m:.2} ± {s:.2}"))
+            .collect();
+        let _ = writeln!(
+            md,
+            "| paper (published, real sensor) | {} | ~5 |",
+            published.join(" | ")
+        );
+        for &m in &self.protocol.methods {
+            let cells: Vec<String> = (0..columns.len())
+                .map(|i| self.summary(m, |t| in_column(t, i)).cell())
+                .collect();
+            let _ = writeln!(
+                md,
+                "| {} (geltip) | {} | {} |",
+                m.name(),
+                cells.join(" | "),
+                self.summary(m, |_| true).cell()
+            );
+        }
     }
 
     /// Every tap as CSV: object, position, method, truth, prediction, error, detected.
@@ -255,6 +251,20 @@ impl Report {
     }
 }
 
+/// The paper's eight taps of `object`, as [`run`] renders them.
+pub fn taps(object: Solid, protocol: &Protocol) -> Vec<Contact> {
+    POSITIONS
+        .iter()
+        .map(|(place, _)| Contact {
+            object: Arc::new(Object::Solid(object)),
+            place: *place,
+            azimuth_deg: protocol.azimuth_deg,
+            spin_deg: 0.0,
+            depth_mm: protocol.depth_mm,
+        })
+        .collect()
+}
+
 /// File-name stem of a tap's image.
 pub fn tap_name(object: Solid, position: usize) -> String {
     let slug = match POSITIONS[position].0 {
@@ -288,19 +298,9 @@ pub fn run(
             reference.as_raw(),
         )?;
     }
-    let mut taps = Vec::new();
+    let mut results = Vec::new();
     for object in Solid::ALL {
-        let contacts: Vec<Contact> = POSITIONS
-            .iter()
-            .map(|(place, _)| Contact {
-                object: Arc::new(Object::Solid(object)),
-                place: *place,
-                azimuth_deg: protocol.azimuth_deg,
-                spin_deg: 0.0,
-                depth_mm: protocol.depth_mm,
-            })
-            .collect();
-        let rendered = renderer.render_batch(&contacts)?;
+        let rendered = renderer.render_batch(&taps(object, protocol))?;
         for (position, (frame, truth)) in rendered.into_iter().enumerate() {
             let image = frame.to_rgb();
             let name = tap_name(object, position);
@@ -319,7 +319,7 @@ pub fn run(
             for &method in &protocol.methods {
                 let d = localiser.localise(&reference, &image, method)?;
                 let prediction = if d.detected { d.point } else { None };
-                taps.push(TapResult {
+                results.push(TapResult {
                     object,
                     position,
                     method,
@@ -335,7 +335,7 @@ pub fn run(
     let report = Report {
         sensor: sensor.name.clone(),
         protocol: protocol.clone(),
-        taps,
+        taps: results,
     };
     if let Some(dir) = out {
         output::write_atomic(dir.join("taps.csv"), report.csv().as_bytes())?;
