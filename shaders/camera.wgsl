@@ -37,9 +37,13 @@ fn height_at_disc(u: vec2<f32>) -> f32 {
     return v;
 }
 
-fn probes_untouched(p: Probes) -> bool {
-    return height_at_disc(p.a) == 0.0 && height_at_disc(p.b) == 0.0 && height_at_disc(p.c) == 0.0;
+// The largest displacement the probes see.
+fn probes_depth(p: Probes) -> f32 {
+    return max(abs(height_at_disc(p.a)), max(abs(height_at_disc(p.b)), abs(height_at_disc(p.c))));
 }
+
+// Mirror: src/render/camera.rs SHALLOW_MM.
+const SHALLOW_MM: f32 = 0.02;
 
 fn height_at(c: vec2<f32>) -> f32 {
     return height_at_disc(disc_of(c));
@@ -130,11 +134,20 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
     var t_hit = capsule_hit(dir, 0.0);
     // Most rays cross untouched skin: then the skin is the surface itself, exactly, with no
     // march (the reference frame is all such rays, so a frame's untouched pixels match it).
-    hit.untouched = probes_untouched(ray_probes(dir));
-    var steps = sensor.ray_steps;
-    if hit.untouched {
-        steps = 0u;
+    // Over barely moved skin the surface point pushed in along its normal is as good as the
+    // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
+    let deepest = probes_depth(ray_probes(dir));
+    hit.untouched = deepest == 0.0;
+    if deepest < SHALLOW_MM {
+        let c = coord_of(t_hit * dir);
+        hit.indentation = height_at(c);
+        hit.point = t_hit * dir - hit.indentation * surface_normal(c);
+        hit.normal = skin_normal(c);
+        hit.ray = dir;
+        hit.valid = true;
+        return hit;
     }
+    let steps = sensor.ray_steps;
     var t_prev = t_in;
     for (var k = 1u; k <= steps; k++) {
         let t = t_in + (t_out - t_in) * f32(k) / f32(sensor.ray_steps);
@@ -177,7 +190,7 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
         // rectangle need nothing more to know they keep the reference's colour.
         let p0 = gbuffer[base + 3u];
         let p1 = gbuffer[base + 4u];
-        if p1.z == 0.0 || probes_untouched(Probes(p0.xy, p0.zw, p1.xy)) {
+        if p1.z == 0.0 || probes_depth(Probes(p0.xy, p0.zw, p1.xy)) == 0.0 {
             gbuffer[base + 1u] = vec4<f32>(0.0, 0.0, 0.0, 2.0);
             return;
         }

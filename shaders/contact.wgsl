@@ -76,16 +76,11 @@ fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = frame.texel_rect.x + id.x;
     let j = frame.texel_rect.y + id.y;
-    // The mean of 2x2 samples: an object's edge crossing the texel becomes a partial value
-    // instead of a staircase along the grid, which the skin's normals would show as stripes.
-    let centre = texel_centre(i, j);
+    // One sample per texel is enough: the drape makes the skin continuous at object edges.
+    let c = coord_of_disc(texel_centre(i, j));
     var p = 0.0;
-    for (var k = 0u; k < 4u; k++) {
-        let offset = (vec2<f32>(f32(k & 1u), f32(k >> 1u)) - 0.5) * 0.5 * sensor.texel_mm;
-        let c = coord_of_disc(centre + offset);
-        if c.x <= sensor.half_size_mm {
-            p += 0.25 * penetration_at(c);
-        }
+    if c.x <= sensor.half_size_mm {
+        p = penetration_at(c);
     }
     penetration[j * sensor.texels + i] = p;
 }

@@ -12,6 +12,10 @@ use crate::finger::{Finger, SurfaceCoord};
 use crate::sensor::Sensor;
 use glam::{DVec2, DVec3};
 
+/// Skin moved less than this (mm) along a ray's stretch of shell is not marched: the surface
+/// point pushed in along its normal stands for the crossing.
+pub const SHALLOW_MM: f64 = 0.02;
+
 /// Points along a ray's stretch of shell where the skin is probed before marching.
 pub const UNTOUCHED_PROBES: u32 = 3;
 
@@ -127,11 +131,26 @@ pub fn cast_ray(
     let mut t_hit = capsule_hit(f, dir, 0.0)?;
     // Most rays cross untouched skin: then the skin is the surface itself, exactly, with no
     // march (the reference frame is all such rays, so a frame's untouched pixels match it).
-    let untouched = (0..UNTOUCHED_PROBES).all(|k| {
-        let t = t_in + (t_out - t_in) * k as f64 / (UNTOUCHED_PROBES - 1) as f64;
-        height_at(grid, height, f.coord_of(t * dir)) == 0.0
-    });
-    let steps = if untouched { 0 } else { ray_steps };
+    // Over barely moved skin the surface point pushed in along its normal is as good as the
+    // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
+    let deepest = (0..UNTOUCHED_PROBES)
+        .map(|k| {
+            let t = t_in + (t_out - t_in) * k as f64 / (UNTOUCHED_PROBES - 1) as f64;
+            height_at(grid, height, f.coord_of(t * dir)).abs()
+        })
+        .fold(0.0, f64::max);
+    if deepest < SHALLOW_MM {
+        let surface = t_hit * dir;
+        let coord = f.coord_of(surface);
+        let indentation = height_at(grid, height, coord);
+        return Some(SkinHit {
+            point: surface - indentation * f.point_at(coord).normal,
+            normal: skin_normal(f, grid, normals, coord),
+            indentation,
+            ray: dir,
+        });
+    }
+    let steps = ray_steps;
     let mut t_prev = t_in;
     for k in 1..=steps {
         let t = t_in + (t_out - t_in) * k as f64 / ray_steps as f64;
