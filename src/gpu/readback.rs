@@ -85,65 +85,96 @@ pub fn read_buffer<T: bytemuck::Pod>(
     offset: u64,
     count: usize,
 ) -> Result<Vec<T>> {
-    let what = "buffer readback";
     let elem = std::mem::size_of::<T>() as u64;
     if elem == 0 {
-        return Err(GeltipError::input(what, "cannot read zero-sized values"));
-    }
-    if !buffer.usage().contains(wgpu::BufferUsages::COPY_SRC) {
         return Err(GeltipError::input(
-            what,
-            format!("the buffer's usage {:?} lacks COPY_SRC", buffer.usage()),
-        ));
-    }
-    if !offset.is_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT) {
-        return Err(GeltipError::input(
-            what,
-            format!(
-                "offset {offset} is not a multiple of {}",
-                wgpu::COPY_BUFFER_ALIGNMENT
-            ),
+            "buffer readback",
+            "cannot read zero-sized values",
         ));
     }
     let bytes = (count as u64)
         .checked_mul(elem)
-        .ok_or_else(|| GeltipError::input(what, format!("{count} values overflow")))?;
-    if bytes == 0 {
-        return Ok(Vec::new());
+        .ok_or_else(|| GeltipError::input("buffer readback", format!("{count} values overflow")))?;
+    let raw = read_ranges(ctx, &[(buffer, offset, bytes)])?;
+    let mut values = vec![T::zeroed(); count];
+    bytemuck::cast_slice_mut::<T, u8>(&mut values).copy_from_slice(&raw[0]);
+    Ok(values)
+}
+
+/// Reads byte ranges `(buffer, offset, bytes)` of one or more buffers with a single copy
+/// submission and a single map, so that a batch of frames costs one round trip. Each
+/// buffer needs `BufferUsages::COPY_SRC`; offsets must be multiples of 4
+/// ([`wgpu::COPY_BUFFER_ALIGNMENT`]). Returns the bytes of each range, in order.
+pub fn read_ranges(ctx: &GpuContext, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<Vec<u8>>> {
+    let what = "buffer readback";
+    let mut total = 0u64;
+    for &(buffer, offset, bytes) in ranges {
+        if !buffer.usage().contains(wgpu::BufferUsages::COPY_SRC) {
+            return Err(GeltipError::input(
+                what,
+                format!("the buffer's usage {:?} lacks COPY_SRC", buffer.usage()),
+            ));
+        }
+        if !offset.is_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT) {
+            return Err(GeltipError::input(
+                what,
+                format!(
+                    "offset {offset} is not a multiple of {}",
+                    wgpu::COPY_BUFFER_ALIGNMENT
+                ),
+            ));
+        }
+        let copy_size = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        if offset
+            .checked_add(copy_size)
+            .is_none_or(|end| end > buffer.size())
+        {
+            return Err(GeltipError::input(
+                what,
+                format!(
+                    "{bytes} bytes at offset {offset} run past the buffer's {} bytes",
+                    buffer.size()
+                ),
+            ));
+        }
+        total += copy_size;
     }
-    let copy_size = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
-    if offset
-        .checked_add(copy_size)
-        .is_none_or(|end| end > buffer.size())
-    {
-        return Err(GeltipError::input(
-            what,
-            format!(
-                "{count} values of {elem} bytes at offset {offset} run past the buffer's {} bytes",
-                buffer.size()
-            ),
-        ));
+    if total == 0 {
+        return Ok(ranges.iter().map(|_| Vec::new()).collect());
     }
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("geltip read_buffer staging"),
-        size: copy_size,
+        label: Some("geltip readback staging"),
+        size: total,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("geltip read_buffer"),
+            label: Some("geltip readback"),
         });
-    encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, Some(copy_size));
+    let mut at = 0u64;
+    for &(buffer, offset, bytes) in ranges {
+        let copy_size = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        if copy_size > 0 {
+            encoder.copy_buffer_to_buffer(buffer, offset, &staging, at, Some(copy_size));
+        }
+        at += copy_size;
+    }
     let submission = ctx.submit("buffer readback copy", encoder)?;
-    map_read(ctx, &staging, copy_size, submission, what)?;
+    map_read(ctx, &staging, total, submission, what)?;
     let result = staging
-        .get_mapped_range(..copy_size)
+        .get_mapped_range(..total)
         .map(|view| {
-            let mut values = vec![T::zeroed(); count];
-            bytemuck::cast_slice_mut::<T, u8>(&mut values).copy_from_slice(&view[..bytes as usize]);
-            values
+            let mut at = 0usize;
+            ranges
+                .iter()
+                .map(|&(_, _, bytes)| {
+                    let out = view[at..at + bytes as usize].to_vec();
+                    at += (bytes as usize).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT as usize);
+                    out
+                })
+                .collect()
         })
         .map_err(|e| GeltipError::Gpu(format!("{what}: {}", one_line(&e.to_string()))));
     staging.unmap();

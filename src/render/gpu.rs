@@ -7,7 +7,7 @@
 use super::uniforms::{FrameUniform, SensorUniform};
 use super::{contact, elastomer, Contact, Frame, GroundTruth, HeightfieldGrid, Rect};
 use crate::error::{GeltipError, Result};
-use crate::gpu::readback::read_buffer;
+use crate::gpu::readback::{read_buffer, read_ranges};
 use crate::gpu::shaders::create_compute_pipeline;
 use crate::gpu::GpuContext;
 use crate::object::Object;
@@ -571,28 +571,34 @@ impl Renderer {
         timings.render += rendered - start;
         let n = prepared.len();
         let pixels = (w * h) as usize;
-        let words = self.slot_bytes as usize / 4;
-        let images: Vec<u32> = read_buffer(self.ctx, &self.image, 0, words * n)?;
-        let counters: Vec<u32> =
-            read_buffer(self.ctx, &self.counters, 0, (COUNTER_SLOT as usize / 4) * n)?;
+        // One round trip for the batch: each frame's image, the rows of indentation that can
+        // be non-zero (the re-rendered ones), and the counters.
+        let frame_bytes = (pixels * 4) as u64;
+        let rows: Vec<(u64, u64)> = prepared
+            .iter()
+            .map(|p| {
+                p.pixel_rect
+                    .map_or((0, 0), |r| ((r.y * w) as u64, (r.h * w) as u64))
+            })
+            .collect();
+        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> = Vec::with_capacity(2 * n + 1);
+        for (k, &(start, count)) in rows.iter().enumerate() {
+            let slot = k as u64 * self.slot_bytes;
+            ranges.push((&self.image, slot, frame_bytes));
+            ranges.push((&self.indentation, slot + start * 4, count * 4));
+        }
+        ranges.push((&self.counters, 0, COUNTER_SLOT * n as u64));
+        let mut data = read_ranges(self.ctx, &ranges)?;
+        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&data[2 * n]);
         let mut frames = Vec::with_capacity(n);
-        for (k, p) in prepared.iter().enumerate() {
-            // Indentation is zero outside the re-rendered rows: read only those.
+        for (k, &(start, _)) in rows.iter().enumerate() {
             let mut indentation = vec![0.0f32; pixels];
-            if let Some(r) = p.pixel_rect {
-                let start = (r.y * w) as usize;
-                let rows: Vec<f32> = read_buffer(
-                    self.ctx,
-                    &self.indentation,
-                    k as u64 * self.slot_bytes + start as u64 * 4,
-                    (r.h * w) as usize,
-                )?;
-                indentation[start..start + rows.len()].copy_from_slice(&rows);
-            }
+            let read: Vec<f32> = bytemuck::pod_collect_to_vec(&data[2 * k + 1]);
+            indentation[start as usize..start as usize + read.len()].copy_from_slice(&read);
             let frame = Frame {
                 width: w,
                 height: h,
-                rgba: bytemuck::cast_slice(&images[k * words..k * words + pixels]).to_vec(),
+                rgba: std::mem::take(&mut data[2 * k]),
                 indentation,
             };
             frames.push((frame, counters[k * COUNTER_SLOT as usize / 4]));
