@@ -9,6 +9,17 @@ use std::path::{Path, PathBuf};
 const SHADER: &str = "shaders/shared/object.wgsl";
 const VOXEL: f64 = 0.25;
 
+/// Distance from `p` to the nearest triangle of `mesh`, by brute force.
+fn brute_distance(mesh: &Mesh, p: DVec3) -> f64 {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            point_triangle_distance(p, a, b, c)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// A small deterministic generator (SplitMix64).
 struct Rng(u64);
 
@@ -87,14 +98,7 @@ fn baked_voxels_hold_exact_distances_to_the_mesh_everywhere() {
         for _ in 0..800 {
             let v = [0, 1, 2].map(|a| (rng.next() * f64::from(grid.dims[a])) as u32);
             let p = grid.voxel_centre(v[0], v[1], v[2]);
-            let brute = mesh
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                    point_triangle_distance(p, a, b, c)
-                })
-                .fold(f64::INFINITY, f64::min);
+            let brute = brute_distance(&mesh, p);
             let got = f64::from(grid.values[grid.index(v[0], v[1], v[2])]);
             // Within the exact band (2 voxels) exact up to f32; beyond it the distance to
             // the nearest triangle the sweeps found: never less than the truth, and at most
@@ -222,14 +226,7 @@ fn analytic_sdfs_are_exact_distances_to_the_mesh_surface() {
                 continue;
             }
             n += 1;
-            let brute = mesh
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                    point_triangle_distance(p, a, b, c)
-                })
-                .fold(f64::INFINITY, f64::min);
+            let brute = brute_distance(&mesh, p);
             // Chord error of 64 segments (and 32 rings) on radius 5: below 0.02 mm.
             assert!(
                 (brute - d.abs()).abs() < 0.02,
