@@ -124,13 +124,26 @@ impl Renderer {
         let pixels = sensor.width as u64 * sensor.height as u64;
         let slot_bytes = (pixels * 4).next_multiple_of(256);
         let limits = ctx.device.limits();
-        let largest = (pixels * GBUFFER_BYTES_PER_PIXEL).max(slot_bytes * MAX_BATCH as u64);
-        if largest > limits.max_storage_buffer_binding_size || largest > limits.max_buffer_size {
+        let allowed = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let image_bytes = (pixels * GBUFFER_BYTES_PER_PIXEL).max(slot_bytes * MAX_BATCH as u64);
+        if image_bytes > allowed {
             return Err(GeltipError::input(
                 "image",
                 format!(
-                    "{}x{} needs {largest} byte GPU buffers; this device allows {}",
-                    sensor.width, sensor.height, limits.max_storage_buffer_binding_size
+                    "{}x{} needs {image_bytes} byte GPU buffers; this device allows {allowed}",
+                    sensor.width, sensor.height
+                ),
+            ));
+        }
+        if texels * 16 > allowed {
+            return Err(GeltipError::config(
+                "render.heightfield_texels",
+                format!(
+                    "{} texels per side need {} byte GPU buffers; this device allows {allowed}",
+                    grid.texels,
+                    texels * 16
                 ),
             ));
         }
