@@ -27,14 +27,9 @@ fn ray_probes(dir: vec3<f32>) -> Probes {
 }
 
 fn height_at_disc(u: vec2<f32>) -> f32 {
-    let taps = bilinear_taps(texel_of(u));
-    var v = 0.0;
-    for (var k = 0; k < 4; k++) {
-        if taps.index[k] >= 0 {
-            v += taps.weight[k] * height[taps.index[k]];
-        }
-    }
-    return v;
+    let t = bilinear_taps(texel_of(u));
+    return t.weight.x * height[t.index.x] + t.weight.y * height[t.index.y]
+        + t.weight.z * height[t.index.z] + t.weight.w * height[t.index.w];
 }
 
 // The largest displacement the probes see.
@@ -88,13 +83,9 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
 // Outward normal of the deformed skin: the undeformed normal plus the interpolated offset.
 fn skin_normal(c: vec2<f32>) -> vec3<f32> {
     let n0 = surface_normal(c);
-    let taps = bilinear_taps(texel_of(disc_of(c)));
-    var offset = vec3<f32>(0.0);
-    for (var k = 0; k < 4; k++) {
-        if taps.index[k] >= 0 {
-            offset += taps.weight[k] * elastomer_scratch[taps.index[k]].xyz;
-        }
-    }
+    let t = bilinear_taps(texel_of(disc_of(c)));
+    let offset = t.weight.x * elastomer_scratch[t.index.x].xyz + t.weight.y * elastomer_scratch[t.index.y].xyz
+        + t.weight.z * elastomer_scratch[t.index.z].xyz + t.weight.w * elastomer_scratch[t.index.w].xyz;
     let n = n0 + offset;
     let len = length(n);
     if len == 0.0 {

@@ -6,25 +6,15 @@
 // then parallels), kernels in surface millimetres. Mirror: src/render/elastomer.rs.
 
 fn sample_penetration(t: vec2<f32>) -> f32 {
-    let taps = bilinear_taps(t);
-    var v = 0.0;
-    for (var k = 0; k < 4; k++) {
-        if taps.index[k] >= 0 {
-            v += taps.weight[k] * penetration[taps.index[k]];
-        }
-    }
-    return v;
+    let b = bilinear_taps(t);
+    return b.weight.x * penetration[b.index.x] + b.weight.y * penetration[b.index.y]
+        + b.weight.z * penetration[b.index.z] + b.weight.w * penetration[b.index.w];
 }
 
 fn sample_meridian(t: vec2<f32>) -> vec2<f32> {
-    let taps = bilinear_taps(t);
-    var v = vec2<f32>(0.0);
-    for (var k = 0; k < 4; k++) {
-        if taps.index[k] >= 0 {
-            v += taps.weight[k] * elastomer_scratch[taps.index[k]].xy;
-        }
-    }
-    return v;
+    let b = bilinear_taps(t);
+    return b.weight.x * elastomer_scratch[b.index.x].xy + b.weight.y * elastomer_scratch[b.index.y].xy
+        + b.weight.z * elastomer_scratch[b.index.z].xy + b.weight.w * elastomer_scratch[b.index.w].xy;
 }
 
 // Weights of the narrow (x) and wide (y) Gaussians at surface offset x (tap k).

@@ -270,9 +270,11 @@ fn texel_of(disc: vec2<f32>) -> vec2<f32> {
 }
 
 // Bilinear interpolation weights and the four texel indices around continuous texel
-// coordinates t (centres at +0.5); indices outside the grid come back as -1.
+// coordinates t (centres at +0.5), in the order (x, y), (x+1, y), (x, y+1), (x+1, y+1).
+// A tap outside the grid gets weight 0 and index 0, so a sampler is a plain weighted sum of
+// four loads: no branches, no dynamic indexing (both slow on CPU drivers such as lavapipe).
 struct Taps {
-    index: vec4<i32>,
+    index: vec4<u32>,
     weight: vec4<f32>,
 }
 
@@ -281,16 +283,12 @@ fn bilinear_taps(t: vec2<f32>) -> Taps {
     let base = floor(p);
     let f = p - base;
     let n = i32(sensor.texels);
+    let x = vec4<i32>(i32(base.x)) + vec4<i32>(0, 1, 0, 1);
+    let y = vec4<i32>(i32(base.y)) + vec4<i32>(0, 0, 1, 1);
+    let inside = x >= vec4<i32>(0) & y >= vec4<i32>(0) & x < vec4<i32>(n) & y < vec4<i32>(n);
+    let weight = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
     var out: Taps;
-    let offsets = array<vec2<i32>, 4>(vec2<i32>(0, 0), vec2<i32>(1, 0), vec2<i32>(0, 1), vec2<i32>(1, 1));
-    out.weight = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
-    for (var k = 0; k < 4; k++) {
-        let q = vec2<i32>(base) + offsets[k];
-        if q.x < 0 || q.y < 0 || q.x >= n || q.y >= n {
-            out.index[k] = -1;
-        } else {
-            out.index[k] = q.y * n + q.x;
-        }
-    }
+    out.weight = select(vec4<f32>(0.0), weight, inside);
+    out.index = select(vec4<u32>(0u), vec4<u32>(y * n + x), inside);
     return out;
 }
