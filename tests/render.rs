@@ -401,3 +401,47 @@ fn bad_contacts_are_refused() {
         assert!(err.contains(what), "{err}");
     }
 }
+
+#[test]
+fn a_contact_the_lens_cannot_see_renders_the_empty_finger() {
+    let sensor = Sensor::preset("webcam70").unwrap();
+    let mut r = Renderer::new(&sensor).unwrap();
+    let (frame, truth) = r
+        .render(&contact(Solid::Cone, Place::Translation(15.0), 1.0))
+        .unwrap();
+    assert_eq!(&frame, r.reference());
+    let why = truth.pixel.unwrap_err();
+    assert!(why.contains("field of view"), "{why}");
+    assert_eq!(truth.mask_pixels, 0);
+}
+
+#[test]
+fn a_loaded_mesh_renders_like_its_analytic_solid() {
+    let mut r = paper();
+    let reference = rgb(r.reference());
+    for solid in [Solid::Sphere, Solid::Tube, Solid::Edge] {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("assets/objects/{}.obj", solid.name()));
+        let mesh = Arc::new(Object::from_arg(path.to_str().unwrap()).unwrap());
+        let place = Place::Rotation(40.0);
+        let analytic = contact(solid, place, 1.0);
+        let loaded = Contact {
+            object: mesh,
+            ..analytic.clone()
+        };
+        let (a, ta) = r.render(&analytic).unwrap();
+        let (b, tb) = r.render(&loaded).unwrap();
+        // Both press the same shape: the baked SDF is within a voxel (0.25 mm) of the truth.
+        let d = diff(&rgb(&a), &rgb(&b), 8);
+        assert!(d.frac_over < 0.002, "{solid:?}: {d:?}");
+        let changed = diff(&rgb(&b), &reference, 8);
+        assert!(
+            changed.frac_over > 0.0005,
+            "{solid:?}: the mesh left no imprint"
+        );
+        assert_eq!(ta.point, tb.point);
+        assert!(
+            (ta.mask_pixels as f64 - tb.mask_pixels as f64).abs() < 0.1 * ta.mask_pixels as f64
+        );
+    }
+}

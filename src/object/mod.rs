@@ -25,6 +25,11 @@ use std::path::Path;
 /// Voxel size (mm) at which [`Object::from_arg`] bakes loaded meshes.
 pub const MESH_VOXEL_MM: f64 = 0.25;
 
+/// Exact distances (mm) [`Object::from_arg`] bakes around a loaded mesh: the renderer traces
+/// the object grown by the skin's drape radius, down to the press depth, so distances must be
+/// exact that far out (see [`Object::exact_reach_mm`]).
+pub const MESH_PAD_MM: f64 = 5.0;
+
 /// Something to press into the finger.
 #[derive(Debug, Clone)]
 pub enum Object {
@@ -63,12 +68,14 @@ impl Object {
             ));
         }
         let mesh = Mesh::load(path)?.placed_for_contact();
-        let grid = SdfGrid::bake(&mesh, MESH_VOXEL_MM).map_err(|e| GeltipError::InvalidMesh {
-            path: path.to_path_buf(),
-            reason: match e {
-                GeltipError::InvalidInput { reason, .. } => reason,
-                other => other.to_string(),
-            },
+        let grid = SdfGrid::bake_padded(&mesh, MESH_VOXEL_MM, MESH_PAD_MM).map_err(|e| {
+            GeltipError::InvalidMesh {
+                path: path.to_path_buf(),
+                reason: match e {
+                    GeltipError::InvalidInput { reason, .. } => reason,
+                    other => other.to_string(),
+                },
+            }
         })?;
         let name = path
             .file_stem()
@@ -114,6 +121,19 @@ impl Object {
         match self {
             Object::Solid(s) => s.footprint_radius(),
             Object::Mesh { mesh, .. } => mesh.max_axis_distance(),
+        }
+    }
+
+    /// How far (mm) from the object its SDF is exact: unlimited for the analytic solids; for
+    /// a baked mesh, the margin between the mesh's bounds and the grid's box (beyond it the
+    /// grid gives only a lower bound, which would make a grown object look closer than it is).
+    pub fn exact_reach_mm(&self) -> f64 {
+        match self {
+            Object::Solid(_) => f64::INFINITY,
+            Object::Mesh { mesh, grid, .. } => {
+                let (lo, hi) = mesh.bounds();
+                (lo - grid.origin).min(grid.max_corner() - hi).min_element()
+            }
         }
     }
 }

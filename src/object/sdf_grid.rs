@@ -49,6 +49,12 @@ impl SdfGrid {
     /// Refuses an invalid mesh, a voxel size that is not a positive number, and a mesh that
     /// would need more than [`MAX_GRID_SIDE`] voxels along a side.
     pub fn bake(mesh: &Mesh, voxel_mm: f64) -> Result<SdfGrid> {
+        SdfGrid::bake_padded(mesh, voxel_mm, 0.0)
+    }
+
+    /// [`SdfGrid::bake`] with at least `pad_mm` of exact distances around the mesh's bounding
+    /// box (outside the grid, [`SdfGrid::sample`] gives only a lower bound).
+    pub fn bake_padded(mesh: &Mesh, voxel_mm: f64, pad_mm: f64) -> Result<SdfGrid> {
         if !(voxel_mm.is_finite() && voxel_mm > 0.0) {
             return Err(GeltipError::input(
                 "sdf bake",
@@ -58,7 +64,7 @@ impl SdfGrid {
         mesh.validate()
             .map_err(|r| GeltipError::input("sdf bake", r))?;
         let (lo, hi) = mesh.bounds();
-        let pad = f64::from(PAD_VOXELS);
+        let pad = f64::from(PAD_VOXELS).max((pad_mm.max(0.0) / voxel_mm).ceil());
         let origin = lo - pad * voxel_mm;
         let extent = hi - lo;
         let side = |e: f64| (e / voxel_mm).ceil() + 1.0 + 2.0 * pad;

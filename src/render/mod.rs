@@ -137,13 +137,27 @@ impl Contact {
                 format!("a press depth cannot be negative, got {} mm", self.depth_mm),
             ));
         }
+        let reach = contact::max_trace_depth(f, self.depth_mm) + sensor.config.elastomer.drape_mm;
+        if self.object.exact_reach_mm() < reach {
+            return Err(GeltipError::input(
+                format!("object {}", self.object.name()),
+                format!(
+                    "its baked SDF is exact only {:.2} mm around it; this sensor's drape and press need {reach:.2} mm",
+                    self.object.exact_reach_mm()
+                ),
+            ));
+        }
         let s = self.place.arc_length(sensor);
-        let s_max = heightfield_extent(sensor) - margin_mm(sensor);
+        // The finger runs from the tip down to the camera's plane (further where the lens sees
+        // behind it). A contact the lens cannot see renders as the empty finger, and its
+        // ground truth says why it has no pixel.
+        let s_max = (heightfield_extent(sensor) - margin_mm(sensor))
+            .max(f.junction_s() + f.cylinder_length);
         if !(0.0..=s_max).contains(&s) {
             return Err(GeltipError::input(
                 "--at",
                 format!(
-                    "{} is {s:.3} mm from the tip along the surface; the sensor's lens sees 0..{s_max:.3} mm",
+                    "{} is {s:.3} mm from the tip along the surface; the finger runs 0..{s_max:.3} mm",
                     self.place.label()
                 ),
             ));
