@@ -21,6 +21,9 @@ use wgpu::util::DeviceExt;
 /// no faster on lavapipe).
 const WORKGROUP: u32 = 8;
 
+/// Baked SDF grids of loaded meshes kept on the GPU at most.
+const MAX_CACHED_GRIDS: usize = 16;
+
 /// Frames recorded into one submission at most.
 pub const MAX_BATCH: usize = 8;
 
@@ -406,6 +409,10 @@ impl Renderer {
         if let Object::Mesh { grid, .. } = contact.object.as_ref() {
             let key = Arc::as_ptr(&contact.object) as usize;
             if !self.grids.contains_key(&key) {
+                // A bound on the cache: a long run may load many meshes.
+                if self.grids.len() >= MAX_CACHED_GRIDS {
+                    self.grids.clear();
+                }
                 let buffer =
                     self.ctx
                         .device
@@ -440,7 +447,7 @@ impl Renderer {
             mask_pixels: 0,
             mask_bbox: None,
             over_pressed: false,
-            max_penetration_mm: contact::penetration(
+            contact_indentation_mm: contact::penetration(
                 f,
                 &pose,
                 &contact.object,

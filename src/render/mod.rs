@@ -206,8 +206,9 @@ pub struct GroundTruth {
     pub mask_bbox: Option<[u32; 4]>,
     /// Whether the object pushed the gel against the rigid shell (penetration > thickness).
     pub over_pressed: bool,
-    /// Deepest penetration of the object along the surface normal, mm.
-    pub max_penetration_mm: f64,
+    /// How far the skin is pushed in at the contact point itself (mm): the press depth for
+    /// a solid top, 0 in a tube's hole.
+    pub contact_indentation_mm: f64,
 }
 
 /// Indentation (mm) above which a pixel belongs to the contact mask.
@@ -235,7 +236,7 @@ impl GroundTruth {
             "mask_pixels": self.mask_pixels,
             "mask_bbox": self.mask_bbox,
             "over_pressed": self.over_pressed,
-            "max_penetration_mm": self.max_penetration_mm,
+            "contact_indentation_mm": self.contact_indentation_mm,
         })
     }
 }
