@@ -108,6 +108,37 @@ fn encode_fill(
     pass.dispatch_workgroups(W.div_ceil(8), H.div_ceil(8), 1);
 }
 
+/// An encoder that runs `source`'s `main` once over `groups` workgroups with `buffer` at
+/// binding 0.
+fn encode_buffer_pass(
+    ctx: &GpuContext,
+    name: &str,
+    source: &str,
+    buffer: &wgpu::Buffer,
+    groups: u32,
+) -> wgpu::CommandEncoder {
+    let pipeline = create_compute_pipeline_from_source(ctx, name, source, "main", None)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buffer.as_entire_binding(),
+        }],
+    });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(groups, 1, 1);
+    }
+    encoder
+}
+
 fn fill_texture(ctx: &GpuContext, source: &str, format: wgpu::TextureFormat) -> wgpu::Texture {
     let pipeline = create_compute_pipeline_from_source(ctx, "inline.wgsl", source, "main", None)
         .unwrap_or_else(|e| panic!("{e}"));
@@ -284,26 +315,7 @@ fn storage_buffer_reads_back() {
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let pipeline =
-        create_compute_pipeline_from_source(ctx, "inline.wgsl", PATTERN_BUFFER, "main", None)
-            .unwrap_or_else(|e| panic!("{e}"));
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: buffer.as_entire_binding(),
-        }],
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
-    }
+    let encoder = encode_buffer_pass(ctx, "inline.wgsl", PATTERN_BUFFER, &buffer, n.div_ceil(64));
     ctx.submit_and_wait("buffer fill", encoder).unwrap();
 
     let expected = |i: u32| i.wrapping_mul(2654435761).wrapping_add(12345);
@@ -445,25 +457,7 @@ fn wait_times_out_on_long_work() {
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let pipeline = create_compute_pipeline_from_source(ctx, "slow.wgsl", SLOW, "main", None)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: buffer.as_entire_binding(),
-        }],
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(n / 64, 1, 1);
-    }
+    let encoder = encode_buffer_pass(ctx, "slow.wgsl", SLOW, &buffer, n / 64);
     let submission = ctx.submit("slow", encoder).unwrap();
     let start = Instant::now();
     let result = ctx.wait_for(submission.clone(), "slow work", Duration::from_millis(1));
