@@ -106,14 +106,11 @@ struct SkinHit {
     indentation: f32,
     ray: vec3<f32>,
     valid: bool,
-    // The ray crossed untouched skin: the pixel is the reference frame's.
-    untouched: bool,
 }
 
 fn cast_ray(px: vec2<f32>) -> SkinHit {
     var hit: SkinHit;
     hit.valid = false;
-    hit.untouched = false;
     let ray = pixel_ray(px);
     if ray.w == 0.0 {
         return hit;
@@ -128,7 +125,6 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
     // Over barely moved skin the surface point pushed in along its normal is as good as the
     // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
     let deepest = probes_depth(ray_probes(dir));
-    hit.untouched = deepest == 0.0;
     if deepest < SHALLOW_MM {
         let c = coord_of(t_hit * dir);
         hit.indentation = height_at(c);
@@ -138,25 +134,32 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
         hit.valid = true;
         return hit;
     }
+    // Bracket first, refine after: on a SIMD device (llvmpipe runs 8 pixels per lane group
+    // and executes both sides of every branch) a refinement inside the stepping loop would
+    // cost every pixel the bisection at every step.
     let steps = sensor.ray_steps;
-    var t_prev = t_in;
+    var lo = t_in;
+    var hi = t_in;
+    var found = false;
     for (var k = 1u; k <= steps; k++) {
-        let t = t_in + (t_out - t_in) * f32(k) / f32(sensor.ray_steps);
+        let t = t_in + (t_out - t_in) * f32(k) / f32(steps);
         if gap(t, dir) < 0.0 {
-            var lo = t_prev;
-            var hi = t;
-            var g_lo = gap(lo, dir);
-            var g_hi = gap(hi, dir);
-            for (var b = 0u; b < BISECTION_STEPS; b++) {
-                let mid = 0.5 * (lo + hi);
-                let g = gap(mid, dir);
-                if g < 0.0 { hi = mid; g_hi = g; } else { lo = mid; g_lo = g; }
-            }
-            // Secant step inside the last bracket.
-            t_hit = lo + (hi - lo) * clamp(g_lo / max(g_lo - g_hi, 1e-12), 0.0, 1.0);
+            hi = t;
+            found = true;
             break;
         }
-        t_prev = t;
+        lo = t;
+    }
+    if found {
+        var g_lo = gap(lo, dir);
+        var g_hi = gap(hi, dir);
+        for (var b = 0u; b < BISECTION_STEPS; b++) {
+            let mid = 0.5 * (lo + hi);
+            let g = gap(mid, dir);
+            if g < 0.0 { hi = mid; g_hi = g; } else { lo = mid; g_lo = g; }
+        }
+        // Secant step inside the last bracket.
+        t_hit = lo + (hi - lo) * clamp(g_lo / max(g_lo - g_hi, 1e-12), 0.0, 1.0);
     }
     hit.point = t_hit * dir;
     let c = coord_of(hit.point);
@@ -167,29 +170,14 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
     return hit;
 }
 
-@compute @workgroup_size(8, 8)
-fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
-        return;
-    }
-    let x = frame.pixel_rect.x + id.x;
-    let y = frame.pixel_rect.y + id.y;
+// One pixel: its skin hit into the G-buffer; the reference frame also leaves the ray's probe
+// positions for later frames' `select_touched`.
+fn camera_pixel(x: u32, y: u32, reference: bool) {
     let base = GBUFFER_STRIDE * (y * sensor.image_size.x + x);
-    let reference = frame.object_kind == REFERENCE_FRAME;
-    if !reference {
-        // The reference frame left this pixel's probe positions: most pixels of a contact's
-        // rectangle need nothing more to know they keep the reference's colour.
-        let p0 = gbuffer[base + 3u];
-        let p1 = gbuffer[base + 4u];
-        if p1.z == 0.0 || probes_depth(Probes(p0.xy, p0.zw, p1.xy)) == 0.0 {
-            gbuffer[base + 1u] = vec4<f32>(0.0, 0.0, 0.0, 2.0);
-            return;
-        }
-    }
     let hit = cast_ray(vec2<f32>(f32(x), f32(y)));
     gbuffer[base] = vec4<f32>(hit.point, hit.indentation);
-    // w: 0 = no ray, 1 = shade, 2 = untouched (keep the reference's pixel).
-    gbuffer[base + 1u] = vec4<f32>(hit.ray, select(0.0, select(1.0, 2.0, hit.untouched), hit.valid));
+    // w: 0 = no ray, 1 = shade.
+    gbuffer[base + 1u] = vec4<f32>(hit.ray, select(0.0, 1.0, hit.valid));
     gbuffer[base + 2u] = vec4<f32>(hit.normal, 0.0);
     if reference {
         if hit.valid {
@@ -200,6 +188,52 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
             gbuffer[base + 4u] = vec4<f32>(0.0);
         }
     }
+}
+
+// The reference frame: every pixel of the pixel rect (the whole image).
+@compute @workgroup_size(8, 8)
+fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
+        return;
+    }
+    camera_pixel(frame.pixel_rect.x + id.x, frame.pixel_rect.y + id.y, true);
+}
+
+// A contact frame, first pass over its pixel rect: the pixels whose ray's stretch of shell
+// sees any deformation (by the probe positions the reference frame left) go on the touched
+// list; the rest keep the reference's colour. Only listed pixels are cast and shaded, in
+// dispatches sized on the GPU (`TOUCHED_DISPATCH`), so no pixel pays for its neighbours'
+// marches: llvmpipe runs 8 pixels per SIMD group and executes both sides of every branch.
+@compute @workgroup_size(8, 8)
+fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
+        return;
+    }
+    let pixel = (frame.pixel_rect.y + id.y) * sensor.image_size.x + frame.pixel_rect.x + id.x;
+    let p0 = gbuffer[GBUFFER_STRIDE * pixel + 3u];
+    let p1 = gbuffer[GBUFFER_STRIDE * pixel + 4u];
+    if p1.z == 0.0 || probes_depth(Probes(p0.xy, p0.zw, p1.xy)) == 0.0 {
+        return;
+    }
+    let k = atomicAdd(&counters[TOUCHED_COUNT], 1u);
+    if k % TOUCHED_WORKGROUP == 0u {
+        atomicAdd(&counters[TOUCHED_DISPATCH], 1u);
+    }
+    if k == 0u {
+        atomicStore(&counters[TOUCHED_DISPATCH + 1u], 1u);
+        atomicStore(&counters[TOUCHED_DISPATCH + 2u], 1u);
+    }
+    atomicStore(&counters[TOUCHED_LIST + k], pixel);
+}
+
+// A contact frame, second pass: one invocation per touched pixel.
+@compute @workgroup_size(64)
+fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= atomicLoad(&counters[TOUCHED_COUNT]) {
+        return;
+    }
+    let pixel = atomicLoad(&counters[TOUCHED_LIST + id.x]);
+    camera_pixel(pixel % sensor.image_size.x, pixel / sensor.image_size.x, false);
 }
 
 // For tests: the undeformed surface point each listed pixel sees. Input:

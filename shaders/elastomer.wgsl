@@ -83,7 +83,7 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let t = sensor.shell_thickness;
     if penetration[idx] > t {
-        atomicAdd(&counters[0], 1u);
+        atomicAdd(&counters[OVER_PRESSED], 1u);
     }
     let pressed = max(penetration[idx], v.x);
     var h = clamp(pressed - sensor.bulge * max(v.y - v.x, 0.0), -0.5 * t, t);

@@ -42,21 +42,10 @@ fn pack_rgba(c: vec3<u32>) -> u32 {
     return c.x | (c.y << 8u) | (c.z << 16u) | (255u << 24u);
 }
 
-@compute @workgroup_size(8, 8)
-fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
-        return;
-    }
-    let x = frame.pixel_rect.x + id.x;
-    let y = frame.pixel_rect.y + id.y;
-    let i = y * sensor.image_size.x + x;
-    // Stride: camera.wgsl GBUFFER_STRIDE.
+// One pixel from its G-buffer row (stride: camera.wgsl GBUFFER_STRIDE).
+fn leds_pixel(i: u32) {
     let g0 = gbuffer[5u * i];
     let g1 = gbuffer[5u * i + 1u];
-    // Untouched skin in a contact frame: the pixel copied from the reference stays.
-    if g1.w == 2.0 && frame.object_kind != REFERENCE_FRAME {
-        return;
-    }
     if g1.w == 0.0 {
         image[i] = pack_rgba(vec3<u32>(0u));
         indentation[i] = 0.0;
@@ -65,6 +54,25 @@ fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
     let colour = shade(g0.xyz, gbuffer[5u * i + 2u].xyz, g1.xyz);
     image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
     indentation[i] = g0.w;
+}
+
+// The reference frame: every pixel of the pixel rect (the whole image).
+@compute @workgroup_size(8, 8)
+fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
+        return;
+    }
+    leds_pixel((frame.pixel_rect.y + id.y) * sensor.image_size.x + frame.pixel_rect.x + id.x);
+}
+
+// A contact frame: the pixels on the touched list (camera.wgsl select_touched); every other
+// pixel keeps the reference's colour, copied before.
+@compute @workgroup_size(64)
+fn leds_touched(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= atomicLoad(&counters[TOUCHED_COUNT]) {
+        return;
+    }
+    leds_pixel(atomicLoad(&counters[TOUCHED_LIST + id.x]));
 }
 
 fn pcg_hash(input: u32) -> u32 {

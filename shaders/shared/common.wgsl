@@ -97,8 +97,19 @@ const REFERENCE_FRAME: u32 = 101u;
 @group(0) @binding(7) var<storage, read_write> indentation: array<f32>;
 // A loaded mesh's SDF: x fastest, then y, then z.
 @group(0) @binding(8) var<storage, read> sdf_grid: array<f32>;
-// [0]: texels pressed beyond the shell.
+// The frame's counters and its touched-pixel list: words below (mirror: src/render/gpu.rs).
 @group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
+
+// Texels pressed beyond the shell.
+const OVER_PRESSED: u32 = 0u;
+// Pixels on the touched list (camera.wgsl select_touched).
+const TOUCHED_COUNT: u32 = 1u;
+// Three words: the workgroups of the passes over the touched list, as an indirect dispatch.
+const TOUCHED_DISPATCH: u32 = 2u;
+// The touched pixels' indices (y * width + x) start here.
+const TOUCHED_LIST: u32 = 64u;
+// Invocations per workgroup of the passes over the touched list.
+const TOUCHED_WORKGROUP: u32 = 64u;
 
 // ---- Lens (src/lens.rs) ----
 

@@ -106,6 +106,18 @@ pub fn read_buffer<T: bytemuck::Pod>(
 /// buffer needs `BufferUsages::COPY_SRC`; offsets must be multiples of 4
 /// ([`wgpu::COPY_BUFFER_ALIGNMENT`]). Returns the bytes of each range, in order.
 pub fn read_ranges(ctx: &GpuContext, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<Vec<u8>>> {
+    read_ranges_via(ctx, None, ranges)
+}
+
+/// [`read_ranges`] through `staging` (`MAP_READ | COPY_DST`, unmapped) when it is big
+/// enough, else through a fresh staging buffer: a caller that reads the same amount again
+/// and again keeps one and saves the allocation (megabytes of fresh pages per read on a
+/// software device).
+pub fn read_ranges_via(
+    ctx: &GpuContext,
+    staging: Option<&wgpu::Buffer>,
+    ranges: &[(&wgpu::Buffer, u64, u64)],
+) -> Result<Vec<Vec<u8>>> {
     let what = "buffer readback";
     let mut total = 0u64;
     for &(buffer, offset, bytes) in ranges {
@@ -142,12 +154,25 @@ pub fn read_ranges(ctx: &GpuContext, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Re
     if total == 0 {
         return Ok(ranges.iter().map(|_| Vec::new()).collect());
     }
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("geltip readback staging"),
-        size: total,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let fresh;
+    let staging = match staging {
+        Some(s)
+            if s.size() >= total
+                && s.usage()
+                    .contains(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST) =>
+        {
+            s
+        }
+        _ => {
+            fresh = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip readback staging"),
+                size: total,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            &fresh
+        }
+    };
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -157,12 +182,12 @@ pub fn read_ranges(ctx: &GpuContext, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Re
     for &(buffer, offset, bytes) in ranges {
         let copy_size = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
         if copy_size > 0 {
-            encoder.copy_buffer_to_buffer(buffer, offset, &staging, at, Some(copy_size));
+            encoder.copy_buffer_to_buffer(buffer, offset, staging, at, Some(copy_size));
         }
         at += copy_size;
     }
     let submission = ctx.submit("buffer readback copy", encoder)?;
-    map_read(ctx, &staging, total, submission, what)?;
+    map_read(ctx, staging, total, submission, what)?;
     let result = staging
         .get_mapped_range(..total)
         .map(|view| {

@@ -150,27 +150,30 @@ pub fn cast_ray(
             ray: dir,
         });
     }
-    let steps = ray_steps;
+    // Bracket first, refine after (the shader's order: see shaders/camera.wgsl).
+    let mut bracket = None;
     let mut t_prev = t_in;
-    for k in 1..=steps {
+    for k in 1..=ray_steps {
         let t = t_in + (t_out - t_in) * k as f64 / ray_steps as f64;
         if gap(t) < 0.0 {
-            let (mut lo, mut hi) = (t_prev, t);
-            let (mut g_lo, mut g_hi) = (gap(lo), gap(hi));
-            for _ in 0..BISECTION_STEPS {
-                let mid = 0.5 * (lo + hi);
-                let g = gap(mid);
-                if g < 0.0 {
-                    (hi, g_hi) = (mid, g);
-                } else {
-                    (lo, g_lo) = (mid, g);
-                }
-            }
-            // Secant step inside the last bracket.
-            t_hit = lo + (hi - lo) * (g_lo / (g_lo - g_hi).max(1e-12)).clamp(0.0, 1.0);
+            bracket = Some((t_prev, t));
             break;
         }
         t_prev = t;
+    }
+    if let Some((mut lo, mut hi)) = bracket {
+        let (mut g_lo, mut g_hi) = (gap(lo), gap(hi));
+        for _ in 0..BISECTION_STEPS {
+            let mid = 0.5 * (lo + hi);
+            let g = gap(mid);
+            if g < 0.0 {
+                (hi, g_hi) = (mid, g);
+            } else {
+                (lo, g_lo) = (mid, g);
+            }
+        }
+        // Secant step inside the last bracket.
+        t_hit = lo + (hi - lo) * (g_lo / (g_lo - g_hi).max(1e-12)).clamp(0.0, 1.0);
     }
     let point = t_hit * dir;
     let coord = f.coord_of(point);

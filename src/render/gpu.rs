@@ -1,13 +1,16 @@
 //! The GPU renderer: the four stages as compute pipelines over one bind group layout
 //! (bindings in `shaders/shared/common.wgsl`). The empty finger is rendered once; each
-//! contact copies it and re-renders only the pixels that can see the contact's footprint.
+//! contact copies it and re-renders only the pixels that can see the contact's footprint:
+//! of the footprint's pixel rectangle, a first pass lists the pixels whose rays the
+//! deformation reaches, and the camera and LED passes run over that list alone, sized on the
+//! GPU (indirect dispatch).
 //! Frames of a batch are recorded into one submission, each into its own slice of the
 //! output buffers, and read back together.
 
 use super::uniforms::{FrameUniform, SensorUniform};
 use super::{contact, elastomer, Contact, Frame, GroundTruth, HeightfieldGrid, Rect};
 use crate::error::{GeltipError, Result};
-use crate::gpu::readback::{read_buffer, read_ranges};
+use crate::gpu::readback::{read_buffer, read_ranges_via};
 use crate::gpu::shaders::create_compute_pipeline;
 use crate::gpu::GpuContext;
 use crate::object::Object;
@@ -33,7 +36,10 @@ struct Pipelines {
     blend_azimuth: wgpu::ComputePipeline,
     skin_normals: wgpu::ComputePipeline,
     camera: wgpu::ComputePipeline,
+    select_touched: wgpu::ComputePipeline,
+    camera_touched: wgpu::ComputePipeline,
     leds: wgpu::ComputePipeline,
+    leds_touched: wgpu::ComputePipeline,
     add_noise: wgpu::ComputePipeline,
     unproject_pixels: wgpu::ComputePipeline,
 }
@@ -73,18 +79,33 @@ pub struct Renderer {
     image: wgpu::Buffer,
     indentation: wgpu::Buffer,
     counters: wgpu::Buffer,
+    /// Per frame of a batch, the touched-list passes' workgroups (copied from `counters`:
+    /// a buffer bound for storage cannot also feed an indirect dispatch).
+    dispatch_args: wgpu::Buffer,
     reference_image: wgpu::Buffer,
+    /// Kept for reading batches back (a batch's images, indentation rows and counters).
+    staging: wgpu::Buffer,
     empty_grid: wgpu::Buffer,
     /// Baked SDF grids of loaded meshes, by object (the Arc keeps the address unique).
     grids: HashMap<usize, (Arc<Object>, wgpu::Buffer)>,
     /// Bytes of one frame's slice of `image` and `indentation` (256-aligned).
     slot_bytes: u64,
+    /// Bytes of one frame's slice of `counters`: the counters and the touched list.
+    counter_bytes: u64,
     reference: Frame,
     seed_counter: u32,
     timings: Timings,
 }
 
-const COUNTER_SLOT: u64 = 256;
+/// Words of a frame's `counters` slice (shaders/shared/common.wgsl).
+const OVER_PRESSED: usize = 0;
+const TOUCHED_COUNT: usize = 1;
+const TOUCHED_DISPATCH: u64 = 2;
+const TOUCHED_LIST: u64 = 64;
+/// Bytes of the counters before the touched list.
+const COUNTER_HEADER_BYTES: u64 = TOUCHED_LIST * 4;
+/// Bytes of one frame's indirect dispatch arguments (three words, 16-byte stride).
+const DISPATCH_ARGS_BYTES: u64 = 16;
 
 /// Five vec4 per pixel (camera.wgsl `GBUFFER_STRIDE`).
 const GBUFFER_BYTES_PER_PIXEL: u64 = 5 * 16;
@@ -126,6 +147,17 @@ impl Renderer {
         let texels = grid.texels as u64 * grid.texels as u64;
         let pixels = sensor.width as u64 * sensor.height as u64;
         let slot_bytes = (pixels * 4).next_multiple_of(256);
+        let counter_bytes = (COUNTER_HEADER_BYTES + pixels * 4).next_multiple_of(256);
+        let downlevel = ctx.adapter.get_downlevel_capabilities();
+        if !downlevel
+            .flags
+            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+        {
+            return Err(GeltipError::Gpu(format!(
+                "adapter {} cannot dispatch compute work indirectly, which the renderer needs",
+                ctx.adapter_info.name
+            )));
+        }
         let limits = ctx.device.limits();
         let allowed = limits
             .max_storage_buffer_binding_size
@@ -188,7 +220,10 @@ impl Renderer {
             blend_azimuth: p("elastomer", "blend_azimuth")?,
             skin_normals: p("camera", "skin_normals")?,
             camera: p("camera", "camera")?,
+            select_touched: p("camera", "select_touched")?,
+            camera_touched: p("camera", "camera_touched")?,
             leds: p("leds", "leds")?,
+            leds_touched: p("leds", "leds_touched")?,
             add_noise: p("leds", "add_noise")?,
             unproject_pixels: p("camera", "unproject_pixels")?,
         };
@@ -226,14 +261,27 @@ impl Renderer {
             ),
             counters: storage(
                 ctx,
-                "geltip counters",
-                COUNTER_SLOT * MAX_BATCH as u64,
+                "geltip counters and touched pixels",
+                counter_bytes * MAX_BATCH as u64,
                 none,
             ),
+            dispatch_args: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip touched dispatch"),
+                size: DISPATCH_ARGS_BYTES * MAX_BATCH as u64,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             reference_image: storage(ctx, "geltip reference", slot_bytes, none),
+            staging: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip batch readback"),
+                size: (2 * slot_bytes + COUNTER_HEADER_BYTES) * MAX_BATCH as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             empty_grid: storage(ctx, "geltip empty grid", 16, none),
             grids: HashMap::new(),
             slot_bytes,
+            counter_bytes,
             reference: Frame {
                 width: sensor.width,
                 height: sensor.height,
@@ -302,7 +350,11 @@ impl Renderer {
             slice(&self.image, slot * self.slot_bytes, self.slot_bytes),
             slice(&self.indentation, slot * self.slot_bytes, self.slot_bytes),
             whole(grid),
-            slice(&self.counters, slot * COUNTER_SLOT, COUNTER_SLOT),
+            slice(
+                &self.counters,
+                slot * self.counter_bytes,
+                self.counter_bytes,
+            ),
         ];
         let entries: Vec<wgpu::BindGroupEntry> = resources
             .into_iter()
@@ -347,6 +399,57 @@ impl Renderer {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind, &[]);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
+    }
+
+    /// The same, with the workgroup count read from `dispatch_args` at `offset`.
+    fn dispatch_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        offset: u64,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: None,
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups_indirect(&self.dispatch_args, offset);
+    }
+
+    /// Contact frame `slot`'s camera and LED stages: list the touched pixels of `rect`, size
+    /// the passes over them, and run those passes.
+    fn record_touched(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        slot: u64,
+        rect: Rect,
+    ) {
+        self.record_select(encoder, bind, slot, rect);
+        let args = slot * DISPATCH_ARGS_BYTES;
+        self.dispatch_indirect(encoder, &self.pipelines.camera_touched, bind, args);
+        self.dispatch_indirect(encoder, &self.pipelines.leds_touched, bind, args);
+    }
+
+    /// The touched list of `rect` and the copy of its dispatch size to `dispatch_args`.
+    fn record_select(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        slot: u64,
+        rect: Rect,
+    ) {
+        let g = (groups(rect.w, WORKGROUP), groups(rect.h, WORKGROUP));
+        Self::dispatch(encoder, &self.pipelines.select_touched, bind, g);
+        encoder.copy_buffer_to_buffer(
+            &self.counters,
+            slot * self.counter_bytes + TOUCHED_DISPATCH * 4,
+            &self.dispatch_args,
+            slot * DISPATCH_ARGS_BYTES,
+            Some(12),
+        );
     }
 
     fn clear_heightfield(&self, encoder: &mut wgpu::CommandEncoder) {
@@ -563,10 +666,11 @@ impl Renderer {
                 Some(self.slot_bytes),
             );
             encoder.clear_buffer(&self.indentation, offset, Some(self.slot_bytes));
+            // The list itself needs no clearing: only its first TOUCHED_COUNT words are read.
             encoder.clear_buffer(
                 &self.counters,
-                slot as u64 * COUNTER_SLOT,
-                Some(COUNTER_SLOT),
+                slot as u64 * self.counter_bytes,
+                Some(COUNTER_HEADER_BYTES),
             );
             if let Some(t) = p.texel_rect {
                 self.clear_heightfield(&mut encoder);
@@ -577,9 +681,7 @@ impl Renderer {
                 Self::dispatch(&mut encoder, &self.pipelines.skin_normals, bind, g);
             }
             if let Some(r) = p.pixel_rect {
-                let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
-                Self::dispatch(&mut encoder, &self.pipelines.camera, bind, g);
-                Self::dispatch(&mut encoder, &self.pipelines.leds, bind, g);
+                self.record_touched(&mut encoder, bind, slot as u64, r);
             }
             if self.sensor.config.render.noise > 0.0 {
                 Self::dispatch(
@@ -605,27 +707,32 @@ impl Renderer {
                     .map_or((0, 0), |r| ((r.y * w) as u64, (r.h * w) as u64))
             })
             .collect();
-        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> = Vec::with_capacity(2 * n + 1);
+        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> = Vec::with_capacity(3 * n);
         for (k, &(start, count)) in rows.iter().enumerate() {
             let slot = k as u64 * self.slot_bytes;
             ranges.push((&self.image, slot, frame_bytes));
             ranges.push((&self.indentation, slot + start * 4, count * 4));
+            ranges.push((
+                &self.counters,
+                k as u64 * self.counter_bytes,
+                COUNTER_HEADER_BYTES,
+            ));
         }
-        ranges.push((&self.counters, 0, COUNTER_SLOT * n as u64));
-        let mut data = read_ranges(self.ctx, &ranges)?;
-        let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&data[2 * n]);
+        let mut data = read_ranges_via(self.ctx, Some(&self.staging), &ranges)?;
         let mut frames = Vec::with_capacity(n);
         for (k, &(start, _)) in rows.iter().enumerate() {
+            let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&data[3 * k + 2]);
+            log::debug!("frame {k}: {} touched pixels", counters[TOUCHED_COUNT]);
             let mut indentation = vec![0.0f32; pixels];
-            let read: Vec<f32> = bytemuck::pod_collect_to_vec(&data[2 * k + 1]);
+            let read: Vec<f32> = bytemuck::pod_collect_to_vec(&data[3 * k + 1]);
             indentation[start as usize..start as usize + read.len()].copy_from_slice(&read);
             let frame = Frame {
                 width: w,
                 height: h,
-                rgba: std::mem::take(&mut data[2 * k]),
+                rgba: std::mem::take(&mut data[3 * k]),
                 indentation,
             };
-            frames.push((frame, counters[k * COUNTER_SLOT as usize / 4]));
+            frames.push((frame, counters[OVER_PRESSED]));
         }
         timings.readback += rendered.elapsed();
         Ok(frames)
@@ -641,57 +748,77 @@ impl Renderer {
             .texel_rect
             .map(|t| (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP)))
             .unwrap_or((0, 0));
-        let r = p
-            .pixel_rect
-            .map(|r| (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP)))
-            .unwrap_or((0, 0));
-        let stages: [(&'static str, Option<&wgpu::ComputePipeline>, (u32, u32)); 8] = [
-            ("copy reference + clear", None, (0, 0)),
-            ("contact", Some(&self.pipelines.contact), t),
+        let pipelines = &self.pipelines;
+        enum Step<'a> {
+            Clear,
+            Texels(&'a wgpu::ComputePipeline),
+            Select,
+            Touched(&'a wgpu::ComputePipeline),
+            Readback,
+        }
+        let stages = [
+            ("copy reference + clear", Step::Clear),
+            ("contact", Step::Texels(&pipelines.contact)),
             (
                 "elastomer: meridians",
-                Some(&self.pipelines.blend_meridian),
-                t,
+                Step::Texels(&pipelines.blend_meridian),
             ),
             (
                 "elastomer: parallels",
-                Some(&self.pipelines.blend_azimuth),
-                t,
+                Step::Texels(&pipelines.blend_azimuth),
             ),
             (
                 "elastomer: skin normals",
-                Some(&self.pipelines.skin_normals),
-                t,
+                Step::Texels(&pipelines.skin_normals),
             ),
-            ("camera", Some(&self.pipelines.camera), r),
-            ("leds", Some(&self.pipelines.leds), r),
-            ("readback", None, (0, 0)),
+            ("camera: select touched", Step::Select),
+            (
+                "camera: touched pixels",
+                Step::Touched(&pipelines.camera_touched),
+            ),
+            (
+                "leds: touched pixels",
+                Step::Touched(&pipelines.leds_touched),
+            ),
+            ("readback", Step::Readback),
         ];
         let mut out = Vec::new();
-        for (name, pipeline, g) in stages {
+        for (name, step) in stages {
             let start = Instant::now();
-            if name == "readback" {
-                let words = self.slot_bytes as usize / 4;
-                let _: Vec<u32> = read_buffer(self.ctx, &self.image, 0, words)?;
-                let _: Vec<f32> = read_buffer(self.ctx, &self.indentation, 0, words)?;
-            } else {
-                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-                match pipeline {
-                    Some(pipeline) => Self::dispatch(&mut encoder, pipeline, &bind, g),
-                    None => {
-                        encoder.copy_buffer_to_buffer(
-                            &self.reference_image,
-                            0,
-                            &self.image,
-                            0,
-                            Some(self.slot_bytes),
-                        );
-                        encoder.clear_buffer(&self.indentation, 0, Some(self.slot_bytes));
-                        self.clear_heightfield(&mut encoder);
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            match step {
+                Step::Readback => {
+                    let words = self.slot_bytes as usize / 4;
+                    let _: Vec<u32> = read_buffer(self.ctx, &self.image, 0, words)?;
+                    let _: Vec<f32> = read_buffer(self.ctx, &self.indentation, 0, words)?;
+                    out.push((name, start.elapsed()));
+                    continue;
+                }
+                Step::Clear => {
+                    encoder.copy_buffer_to_buffer(
+                        &self.reference_image,
+                        0,
+                        &self.image,
+                        0,
+                        Some(self.slot_bytes),
+                    );
+                    encoder.clear_buffer(&self.indentation, 0, Some(self.slot_bytes));
+                    encoder.clear_buffer(&self.counters, 0, Some(COUNTER_HEADER_BYTES));
+                    self.clear_heightfield(&mut encoder);
+                }
+                Step::Texels(pipeline) => Self::dispatch(&mut encoder, pipeline, &bind, t),
+                Step::Select => {
+                    if let Some(r) = p.pixel_rect {
+                        self.record_select(&mut encoder, &bind, 0, r);
                     }
                 }
-                self.ctx.submit_and_wait(name, encoder)?;
+                Step::Touched(pipeline) => {
+                    if p.pixel_rect.is_some() {
+                        self.dispatch_indirect(&mut encoder, pipeline, &bind, 0);
+                    }
+                }
             }
+            self.ctx.submit_and_wait(name, encoder)?;
             out.push((name, start.elapsed()));
         }
         if let (Some(t), Some(r)) = (p.texel_rect, p.pixel_rect) {
