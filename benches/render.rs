@@ -1,10 +1,12 @@
 //! Renderer throughput at the paper sensor's 640x480, printed as a table:
-//! `cargo bench --bench render` (add `-- --frames N` for more frames per row, `-- --sensor
+//! `cargo bench --bench render` (add `-- --frames N` for more frames per pass, `-- --sensor
 //! <preset|file.toml>` for another sensor).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
-//! into CPU preparation, GPU render (submit + wait) and readback (copy, map, unpack).
+//! into CPU preparation, GPU render (submit + wait) and readback (copy, map, unpack), with the
+//! pixels re-rendered per frame. Each row is the median of `--repeat N` passes (default 5;
+//! the machines here are shared and noisy), with the slowest and fastest pass's fps.
 
 use geltip::experiment::{self, Protocol};
 use geltip::object::Solid;
@@ -22,40 +24,99 @@ fn contacts(n: usize) -> Vec<Contact> {
     all.iter().cycle().take(n).cloned().collect()
 }
 
-fn row(name: &str, frames: usize, wall: Duration, t: Timings) {
-    let per = |d: Duration| d.as_secs_f64() * 1e3 / frames as f64;
-    println!(
-        "| {name:<28} | {frames:>6} | {:>8.1} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.2} |",
-        frames as f64 / wall.as_secs_f64(),
-        per(wall),
-        per(t.prepare),
-        per(t.render),
-        per(t.readback),
+/// One measured pass: frames, wall time and the renderer's split.
+#[derive(Clone, Copy)]
+struct Pass {
+    frames: usize,
+    wall: Duration,
+    t: Timings,
+}
+
+impl Pass {
+    fn fps(&self) -> f64 {
+        self.frames as f64 / self.wall.as_secs_f64()
+    }
+}
+
+/// Prints the median pass of `passes` (by fps), with the slowest and fastest pass's fps.
+fn row(name: &str, passes: &mut [Pass]) {
+    passes.sort_by(|a, b| a.fps().total_cmp(&b.fps()));
+    let p = passes[passes.len() / 2];
+    let per = |d: Duration| d.as_secs_f64() * 1e3 / p.frames as f64;
+    let range = format!(
+        "{:.0}-{:.0}",
+        passes[0].fps(),
+        passes[passes.len() - 1].fps()
     );
+    println!(
+        "| {name:<28} | {:>6} | {:>8.1} | {range:>9} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.0} |",
+        p.frames,
+        p.fps(),
+        per(p.wall),
+        per(p.t.prepare),
+        per(p.t.render),
+        per(p.t.readback),
+        p.t.touched_pixels as f64 / p.frames as f64,
+    );
+}
+
+/// Runs `f` (which renders `frames` frames and returns the renderer's timings) `repeat`
+/// times.
+fn passes(
+    repeat: usize,
+    frames: usize,
+    mut f: impl FnMut() -> anyhow::Result<Timings>,
+) -> anyhow::Result<Vec<Pass>> {
+    (0..repeat)
+        .map(|_| {
+            let start = Instant::now();
+            let t = f()?;
+            Ok(Pass {
+                frames,
+                wall: start.elapsed(),
+                t,
+            })
+        })
+        .collect()
+}
+
+fn add(total: &mut Timings, t: Timings) {
+    total.prepare += t.prepare;
+    total.render += t.render;
+    total.readback += t.readback;
+    total.touched_pixels += t.touched_pixels;
+}
+
+fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> anyhow::Result<Option<T>>
+where
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    match args.iter().position(|a| a == name) {
+        None => Ok(None),
+        Some(i) => {
+            let v = args
+                .get(i + 1)
+                .ok_or_else(|| anyhow::anyhow!("{name} needs a value"))?;
+            Ok(Some(
+                v.parse()
+                    .map_err(|e| anyhow::anyhow!("{name} {v:?}: {e}"))?,
+            ))
+        }
+    }
 }
 
 fn main() -> anyhow::Result<()> {
     env_logger::init();
     let args: Vec<String> = std::env::args().collect();
-    let frames: usize = args
-        .iter()
-        .position(|a| a == "--frames")
-        .and_then(|i| args.get(i + 1))
-        .map(|v| v.parse())
-        .transpose()?
-        .unwrap_or(64);
-    let sensor_arg = args
-        .iter()
-        .position(|a| a == "--sensor")
-        .and_then(|i| args.get(i + 1))
-        .cloned()
-        .unwrap_or_else(|| "paper".to_string());
+    let frames: usize = arg(&args, "--frames")?.unwrap_or(64).max(1);
+    let repeat: usize = arg(&args, "--repeat")?.unwrap_or(5).max(1);
+    let sensor_arg: String = arg(&args, "--sensor")?.unwrap_or_else(|| "paper".to_string());
     let sensor = Sensor::load(&sensor_arg)?;
     let start = Instant::now();
     let mut r = Renderer::new(&sensor)?;
     let info = r.adapter().clone();
     println!(
-        "geltip render benchmark: sensor {}, {}x{}, heightfield {}, adapter {} ({:?}), start-up {:.2} s",
+        "geltip render benchmark: sensor {}, {}x{}, heightfield {}, adapter {} ({:?}), start-up {:.2} s; median of {repeat} passes",
         sensor.name,
         sensor.width,
         sensor.height,
@@ -65,54 +126,55 @@ fn main() -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     println!(
-        "| {:<28} | {:>6} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} |",
-        "what", "frames", "fps", "ms/frame", "prepare", "render", "readback"
+        "| {:<28} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} |",
+        "what",
+        "frames",
+        "fps",
+        "fps range",
+        "ms/frame",
+        "prepare",
+        "render",
+        "readback",
+        "touched"
     );
     println!(
-        "|{:-<30}|{:->8}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|",
-        "", "", "", "", "", "", ""
+        "|{:-<30}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|",
+        "", "", "", "", "", "", "", "", ""
     );
 
     let n_ref = (frames / 8).max(4);
-    let mut t = Timings::default();
-    let start = Instant::now();
-    for _ in 0..n_ref {
-        r.render_reference()?;
-        let rt = r.timings();
-        t.render += rt.render;
-        t.readback += rt.readback;
-    }
-    row("no contact, full ray cast", n_ref, start.elapsed(), t);
+    let mut reference = passes(repeat, n_ref, || {
+        let mut t = Timings::default();
+        for _ in 0..n_ref {
+            r.render_reference()?;
+            add(&mut t, r.timings());
+        }
+        Ok(t)
+    })?;
+    row("no contact, full ray cast", &mut reference);
 
     let list = contacts(frames);
-    let mut t = Timings::default();
-    let start = Instant::now();
-    for c in &list {
-        r.render(c)?;
-        let rt = r.timings();
-        t.prepare += rt.prepare;
-        t.render += rt.render;
-        t.readback += rt.readback;
-    }
-    row("one contact per submit", frames, start.elapsed(), t);
+    let mut single = passes(repeat, frames, || {
+        let mut t = Timings::default();
+        for c in &list {
+            r.render(c)?;
+            add(&mut t, r.timings());
+        }
+        Ok(t)
+    })?;
+    row("one contact per submit", &mut single);
 
     // A streaming consumer: each batch's frames are dropped before the next (keeping all of
     // them would time the allocator's fresh pages, not the renderer).
-    let mut t = Timings::default();
-    let start = Instant::now();
-    for batch in list.chunks(MAX_BATCH) {
-        r.render_batch(batch)?;
-        let rt = r.timings();
-        t.prepare += rt.prepare;
-        t.render += rt.render;
-        t.readback += rt.readback;
-    }
-    row(
-        &format!("batches of {MAX_BATCH} contacts"),
-        frames,
-        start.elapsed(),
-        t,
-    );
+    let mut batched = passes(repeat, frames, || {
+        let mut t = Timings::default();
+        for batch in list.chunks(MAX_BATCH) {
+            r.render_batch(batch)?;
+            add(&mut t, r.timings());
+        }
+        Ok(t)
+    })?;
+    row(&format!("batches of {MAX_BATCH} contacts"), &mut batched);
 
     // Where a contact frame's time goes: each stage submitted and waited for on its own,
     // averaged over eight of the paper's taps (every solid, every position).

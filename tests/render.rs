@@ -8,8 +8,8 @@
 mod common;
 
 use geltip::object::{Object, Solid};
-use geltip::render::cpu;
 use geltip::render::gpu::Renderer;
+use geltip::render::{self, camera, cpu, elastomer};
 use geltip::render::{Contact, Frame, Place};
 use geltip::sensor::Sensor;
 use glam::DVec2;
@@ -236,6 +236,15 @@ fn gpu_matches_the_cpu_pipeline() {
         let c = contact(solid, place, 1.0);
         let (gpu, _) = r.render(&c).unwrap();
         let cpu = cpu::render(&sensor, Some(&c)).unwrap();
+        // The pixels re-rendered: the GPU's touched list against the CPU mirror's (f32 and
+        // f64 may part on a probe at the very edge of the deformation).
+        let touched =
+            camera::select_touched(&sensor, r.grid(), &cpu.height, cpu.pixel_rect.unwrap());
+        let (gpu_touched, cpu_touched) = (r.timings().touched_pixels as f64, touched.len() as f64);
+        assert!(
+            cpu_touched > 100.0 && (gpu_touched - cpu_touched).abs() <= 0.01 * cpu_touched,
+            "{solid:?}: touched pixels GPU {gpu_touched}, CPU {cpu_touched}"
+        );
         let d = diff(&rgb(&gpu), &rgb(&cpu.frame), 3);
         assert!(close_enough(&d), "{solid:?} at {place:?}: {d:?}");
         let worst = gpu
@@ -315,6 +324,36 @@ fn deeper_press_changes_the_image_more() {
         );
         last = total;
     }
+}
+
+#[test]
+fn a_press_too_shallow_to_move_the_skin_renders_the_empty_finger() {
+    let mut r = paper();
+    // 4 µm of penetration has a footprint (the passes run) but blends to less than the 5 µm
+    // the elastomer counts as movement: the touched list stays empty and the passes over it
+    // dispatch no work.
+    let shallow = contact(Solid::Sphere, Place::Rotation(30.0), 0.004);
+    let pose = shallow.pose(r.sensor()).unwrap();
+    let reach = elastomer::blend_reach_mm(&r.sensor().config.elastomer);
+    let footprint = render::contact::footprint(r.sensor(), r.grid(), &pose, &shallow.object, reach);
+    assert!(
+        footprint.is_some_and(|f| f.pixels.is_some()),
+        "no footprint: the test would not reach the touched-pixel passes"
+    );
+    let (frame, truth) = r.render(&shallow).unwrap();
+    assert_eq!(r.timings().touched_pixels, 0);
+    assert!(truth.pixel.is_ok());
+    assert!(
+        frame.rgba == r.reference().rgba,
+        "the frame differs from the empty finger"
+    );
+    assert!(frame.indentation.iter().all(|&d| d == 0.0));
+    // And the renderer is fine afterwards: a real press touches pixels again.
+    let (frame, _) = r
+        .render(&contact(Solid::Sphere, Place::Rotation(30.0), 1.0))
+        .unwrap();
+    assert!(r.timings().touched_pixels > 1000);
+    assert!(frame.rgba != r.reference().rgba);
 }
 
 #[test]

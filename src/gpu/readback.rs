@@ -118,6 +118,17 @@ pub fn read_ranges_via(
     staging: Option<&wgpu::Buffer>,
     ranges: &[(&wgpu::Buffer, u64, u64)],
 ) -> Result<Vec<Vec<u8>>> {
+    read_ranges_with(ctx, staging, ranges, |_, bytes| bytes.to_vec())
+}
+
+/// [`read_ranges_via`] handing each range's bytes, still mapped, to `unpack(index, bytes)`,
+/// so that the caller copies them once, straight into what it keeps.
+pub fn read_ranges_with<R>(
+    ctx: &GpuContext,
+    staging: Option<&wgpu::Buffer>,
+    ranges: &[(&wgpu::Buffer, u64, u64)],
+    mut unpack: impl FnMut(usize, &[u8]) -> R,
+) -> Result<Vec<R>> {
     let what = "buffer readback";
     let mut total = 0u64;
     for &(buffer, offset, bytes) in ranges {
@@ -152,7 +163,7 @@ pub fn read_ranges_via(
         total += copy_size;
     }
     if total == 0 {
-        return Ok(ranges.iter().map(|_| Vec::new()).collect());
+        return Ok((0..ranges.len()).map(|k| unpack(k, &[])).collect());
     }
     let fresh;
     let staging = match staging {
@@ -194,8 +205,9 @@ pub fn read_ranges_via(
             let mut at = 0usize;
             ranges
                 .iter()
-                .map(|&(_, _, bytes)| {
-                    let out = view[at..at + bytes as usize].to_vec();
+                .enumerate()
+                .map(|(k, &(_, _, bytes))| {
+                    let out = unpack(k, &view[at..at + bytes as usize]);
                     at += (bytes as usize).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT as usize);
                     out
                 })

@@ -110,6 +110,52 @@ pub fn skin_normal(
     (n0 + offset).try_normalize().unwrap_or(n0)
 }
 
+/// Disc positions where the stretch of shell along `dir` is probed for deformation: where
+/// the ray enters the gel, where it leaves the highest bulge, and midway (`None` if the ray
+/// misses the finger).
+pub fn ray_probes(finger: &Finger, dir: DVec3) -> Option<[DVec2; UNTOUCHED_PROBES as usize]> {
+    let t_in = capsule_hit(finger, dir, -finger.shell_thickness)?;
+    let t_out = capsule_hit(finger, dir, 0.5 * finger.shell_thickness)?;
+    Some(std::array::from_fn(|k| {
+        let t = t_in + (t_out - t_in) * k as f64 / (UNTOUCHED_PROBES - 1) as f64;
+        finger.coord_of(t * dir).to_disc()
+    }))
+}
+
+/// The largest displacement the probes see.
+pub fn probes_depth(grid: &HeightfieldGrid, height: &[f32], probes: &[DVec2]) -> f64 {
+    probes
+        .iter()
+        .map(|&u| sample_field(height, grid.texels, grid.texel_of(u)).abs())
+        .fold(0.0, f64::max)
+}
+
+/// The pixels of `rect` (indices y * width + x, row by row) whose rays' stretch of shell
+/// sees any deformation: the only ones a contact frame re-renders, the rest keep the empty
+/// finger's colour. Mirror of `select_touched` (the GPU lists them in no set order).
+pub fn select_touched(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    height: &[f32],
+    rect: Rect,
+) -> Vec<u32> {
+    let mut touched = Vec::new();
+    for y in rect.y..rect.y + rect.h {
+        for x in rect.x..rect.x + rect.w {
+            let Some(dir) = sensor.ray_direction(DVec2::new(x as f64, y as f64)) else {
+                continue;
+            };
+            let Some(probes) = ray_probes(&sensor.finger, dir) else {
+                continue;
+            };
+            if probes_depth(grid, height, &probes) > 0.0 {
+                touched.push(y * sensor.width + x);
+            }
+        }
+    }
+    touched
+}
+
 /// The skin point a pixel sees, or `None` outside the image or the lens's field of view.
 pub fn cast_ray(
     sensor: &Sensor,
@@ -133,12 +179,7 @@ pub fn cast_ray(
     // march (the reference frame is all such rays, so a frame's untouched pixels match it).
     // Over barely moved skin the surface point pushed in along its normal is as good as the
     // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
-    let deepest = (0..UNTOUCHED_PROBES)
-        .map(|k| {
-            let t = t_in + (t_out - t_in) * k as f64 / (UNTOUCHED_PROBES - 1) as f64;
-            height_at(grid, height, f.coord_of(t * dir)).abs()
-        })
-        .fold(0.0, f64::max);
+    let deepest = probes_depth(grid, height, &ray_probes(f, dir)?);
     if deepest < SHALLOW_MM {
         let surface = t_hit * dir;
         let coord = f.coord_of(surface);

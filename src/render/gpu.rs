@@ -10,7 +10,7 @@
 use super::uniforms::{FrameUniform, SensorUniform};
 use super::{contact, elastomer, Contact, Frame, GroundTruth, HeightfieldGrid, Rect};
 use crate::error::{GeltipError, Result};
-use crate::gpu::readback::{read_buffer, read_ranges_via};
+use crate::gpu::readback::{read_buffer, read_ranges_with};
 use crate::gpu::shaders::create_compute_pipeline;
 use crate::gpu::GpuContext;
 use crate::object::Object;
@@ -44,6 +44,13 @@ struct Pipelines {
     unproject_pixels: wgpu::ComputePipeline,
 }
 
+/// A frame's data as read back (see [`Renderer::read_frames`]).
+enum Part {
+    Rgba(Vec<u8>),
+    Indentation(Vec<f32>),
+    Counters(Vec<u32>),
+}
+
 /// What the CPU prepared for one frame of a batch.
 struct Prepared {
     uniform: FrameUniform,
@@ -62,6 +69,8 @@ pub struct Timings {
     pub render: Duration,
     /// Copying the frames to mappable memory, mapping and unpacking them.
     pub readback: Duration,
+    /// Pixels the camera and LED stages re-rendered (the touched lists' lengths), summed.
+    pub touched_pixels: u64,
 }
 
 /// A renderer for one sensor.
@@ -497,6 +506,7 @@ impl Renderer {
             prepare: Duration::ZERO,
             render,
             readback: start.elapsed() - render,
+            touched_pixels: (w * h) as u64,
         };
         Ok(())
     }
@@ -695,19 +705,50 @@ impl Renderer {
         self.ctx.submit_and_wait("rendering contacts", encoder)?;
         let rendered = Instant::now();
         timings.render += rendered - start;
-        let n = prepared.len();
-        let pixels = (w * h) as usize;
-        // One round trip for the batch: each frame's image, the rows of indentation that can
-        // be non-zero (the re-rendered ones), and the counters.
-        let frame_bytes = (pixels * 4) as u64;
         let rows: Vec<(u64, u64)> = prepared
             .iter()
-            .map(|p| {
-                p.pixel_rect
-                    .map_or((0, 0), |r| ((r.y * w) as u64, (r.h * w) as u64))
-            })
+            .map(|p| self.indentation_rows(p.pixel_rect))
             .collect();
-        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> = Vec::with_capacity(3 * n);
+        let mut parts = self.read_frames(&rows)?.into_iter();
+        let mut frames = Vec::with_capacity(prepared.len());
+        while let (
+            Some(Part::Rgba(rgba)),
+            Some(Part::Indentation(indentation)),
+            Some(Part::Counters(c)),
+        ) = (parts.next(), parts.next(), parts.next())
+        {
+            timings.touched_pixels += c[TOUCHED_COUNT] as u64;
+            let frame = Frame {
+                width: w,
+                height: h,
+                rgba,
+                indentation,
+            };
+            frames.push((frame, c[OVER_PRESSED]));
+        }
+        if frames.len() != prepared.len() {
+            return Err(GeltipError::Gpu(format!(
+                "read back {} of {} frames",
+                frames.len(),
+                prepared.len()
+            )));
+        }
+        timings.readback += rendered.elapsed();
+        Ok(frames)
+    }
+
+    /// The rows of a frame's indentation that can be non-zero (the re-rendered ones), as
+    /// (first pixel, pixels).
+    fn indentation_rows(&self, pixel_rect: Option<Rect>) -> (u64, u64) {
+        let w = self.sensor.width;
+        pixel_rect.map_or((0, 0), |r| ((r.y * w) as u64, (r.h * w) as u64))
+    }
+
+    /// One round trip for frames `0..rows.len()` of a batch: per frame, its image, its
+    /// indentation (read over `rows`, zero elsewhere), and its counters, in that order.
+    fn read_frames(&self, rows: &[(u64, u64)]) -> Result<Vec<Part>> {
+        let frame_bytes = self.sensor.width as u64 * self.sensor.height as u64 * 4;
+        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> = Vec::with_capacity(3 * rows.len());
         for (k, &(start, count)) in rows.iter().enumerate() {
             let slot = k as u64 * self.slot_bytes;
             ranges.push((&self.image, slot, frame_bytes));
@@ -718,24 +759,20 @@ impl Renderer {
                 COUNTER_HEADER_BYTES,
             ));
         }
-        let mut data = read_ranges_via(self.ctx, Some(&self.staging), &ranges)?;
-        let mut frames = Vec::with_capacity(n);
-        for (k, &(start, _)) in rows.iter().enumerate() {
-            let counters: Vec<u32> = bytemuck::pod_collect_to_vec(&data[3 * k + 2]);
-            log::debug!("frame {k}: {} touched pixels", counters[TOUCHED_COUNT]);
-            let mut indentation = vec![0.0f32; pixels];
-            let read: Vec<f32> = bytemuck::pod_collect_to_vec(&data[3 * k + 1]);
-            indentation[start as usize..start as usize + read.len()].copy_from_slice(&read);
-            let frame = Frame {
-                width: w,
-                height: h,
-                rgba: std::mem::take(&mut data[3 * k]),
-                indentation,
-            };
-            frames.push((frame, counters[OVER_PRESSED]));
-        }
-        timings.readback += rendered.elapsed();
-        Ok(frames)
+        let pixels = frame_bytes as usize / 4;
+        read_ranges_with(self.ctx, Some(&self.staging), &ranges, |k, bytes| {
+            match k % 3 {
+                0 => Part::Rgba(bytes.to_vec()),
+                1 => {
+                    let mut indentation = vec![0.0f32; pixels];
+                    let start = rows[k / 3].0 as usize;
+                    let read = &mut indentation[start..start + bytes.len() / 4];
+                    bytemuck::cast_slice_mut::<f32, u8>(read).copy_from_slice(bytes);
+                    Part::Indentation(indentation)
+                }
+                _ => Part::Counters(bytemuck::pod_collect_to_vec(bytes)),
+            }
+        })
     }
 
     /// Renders one contact stage by stage, waiting after each, and returns each stage's wall
@@ -788,9 +825,7 @@ impl Renderer {
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             match step {
                 Step::Readback => {
-                    let words = self.slot_bytes as usize / 4;
-                    let _: Vec<u32> = read_buffer(self.ctx, &self.image, 0, words)?;
-                    let _: Vec<f32> = read_buffer(self.ctx, &self.indentation, 0, words)?;
+                    self.read_frames(&[self.indentation_rows(p.pixel_rect)])?;
                     out.push((name, start.elapsed()));
                     continue;
                 }
