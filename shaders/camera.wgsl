@@ -216,11 +216,12 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let k = atomicAdd(&counters[TOUCHED_COUNT], 1u);
+    // The first pixel of each workgroup's share sizes the dispatch: G groups in all, as
+    // min(G, TOUCHED_MAX_GROUPS) x ceil(G / TOUCHED_MAX_GROUPS) x 1.
     if k % TOUCHED_WORKGROUP == 0u {
-        atomicAdd(&counters[TOUCHED_DISPATCH], 1u);
-    }
-    if k == 0u {
-        atomicStore(&counters[TOUCHED_DISPATCH + 1u], 1u);
+        let g = k / TOUCHED_WORKGROUP;
+        atomicMax(&counters[TOUCHED_DISPATCH], min(g + 1u, TOUCHED_MAX_GROUPS));
+        atomicMax(&counters[TOUCHED_DISPATCH + 1u], g / TOUCHED_MAX_GROUPS + 1u);
         atomicStore(&counters[TOUCHED_DISPATCH + 2u], 1u);
     }
     atomicStore(&counters[TOUCHED_LIST + k], pixel);
@@ -229,10 +230,11 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
 // A contact frame, second pass: one invocation per touched pixel.
 @compute @workgroup_size(64)
 fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= atomicLoad(&counters[TOUCHED_COUNT]) {
+    let k = touched_index(id);
+    if k >= atomicLoad(&counters[TOUCHED_COUNT]) {
         return;
     }
-    let pixel = atomicLoad(&counters[TOUCHED_LIST + id.x]);
+    let pixel = atomicLoad(&counters[TOUCHED_LIST + k]);
     camera_pixel(pixel % sensor.image_size.x, pixel / sensor.image_size.x, false);
 }
 

@@ -69,10 +69,11 @@ fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
 // pixel keeps the reference's colour, copied before.
 @compute @workgroup_size(64)
 fn leds_touched(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= atomicLoad(&counters[TOUCHED_COUNT]) {
+    let k = touched_index(id);
+    if k >= atomicLoad(&counters[TOUCHED_COUNT]) {
         return;
     }
-    leds_pixel(atomicLoad(&counters[TOUCHED_LIST + id.x]));
+    leds_pixel(atomicLoad(&counters[TOUCHED_LIST + k]));
 }
 
 fn pcg_hash(input: u32) -> u32 {

@@ -110,6 +110,14 @@ const TOUCHED_DISPATCH: u32 = 2u;
 const TOUCHED_LIST: u32 = 64u;
 // Invocations per workgroup of the passes over the touched list.
 const TOUCHED_WORKGROUP: u32 = 64u;
+// Most workgroups those passes dispatch along x (WebGPU's least limit per dimension); a
+// longer list goes on in further rows of workgroups (y).
+const TOUCHED_MAX_GROUPS: u32 = 65535u;
+
+// Index on the touched list of invocation `id` of a pass over it.
+fn touched_index(id: vec3<u32>) -> u32 {
+    return id.y * TOUCHED_MAX_GROUPS * TOUCHED_WORKGROUP + id.x;
+}
 
 // ---- Lens (src/lens.rs) ----
 
