@@ -484,20 +484,28 @@ fn map_read(
         buffer.unmap();
         return Err(e);
     }
-    let result = match rx.try_recv() {
-        Ok(r) => r,
-        // The wait returns after callbacks have run; poll once more to be sure.
-        Err(_) => {
-            ctx.poll_now()?;
-            match rx.try_recv() {
-                Ok(r) => r,
-                Err(_) => {
-                    buffer.unmap();
-                    return Err(GeltipError::Gpu(format!(
-                        "{what}: the buffer map did not complete after the submission finished"
-                    )));
-                }
+    // The wait usually returns after our callback has run, but when several threads share
+    // the device, another thread's poll may have taken the callback and not yet called it:
+    // keep polling, briefly, until it arrives (bounded by the GPU timeout all the same).
+    let start = std::time::Instant::now();
+    let result = loop {
+        match rx.recv_timeout(std::time::Duration::from_millis(1)) {
+            Ok(r) => break r,
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                buffer.unmap();
+                return Err(GeltipError::Gpu(format!(
+                    "{what}: the buffer map was dropped without an answer"
+                )));
             }
+            Err(mpsc::RecvTimeoutError::Timeout) if start.elapsed() > ctx.timeout() => {
+                buffer.unmap();
+                return Err(GeltipError::Gpu(format!(
+                    "{what}: the buffer map did not complete within {:.0} s of the submission \
+                     finishing",
+                    ctx.timeout().as_secs_f64()
+                )));
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => ctx.poll_now()?,
         }
     };
     result.map_err(|e| {
