@@ -82,11 +82,18 @@ fn pcg_hash(input: u32) -> u32 {
     return (word >> 22u) ^ word;
 }
 
-fn noise_sample(x: u32, y: u32, c: u32, seed: u32) -> f32 {
-    let base = pcg_hash(x ^ pcg_hash(y ^ pcg_hash(c ^ pcg_hash(seed))));
-    let u1 = (f32(base >> 8u) + 1.0) / 16777217.0;
-    let u2 = f32(pcg_hash(base) >> 8u) / 16777216.0;
-    return sqrt(-2.0 * log(u1)) * cos(2.0 * PI * u2);
+// Three standard-normal samples for pixel `i` (one per channel) from `seed`: Box-Muller on
+// two hashed pairs of 16-bit uniforms (tails end at 4.7 sigma). Two hashes and two
+// logarithms a pixel: the noise pass runs over the whole frame, every frame.
+// Mirror: src/render/leds.rs noise_samples.
+fn noise_samples(i: u32, seed: u32) -> vec3<f32> {
+    let a = pcg_hash(i ^ pcg_hash(seed));
+    let b = pcg_hash(a);
+    let r0 = sqrt(-2.0 * log((f32(a >> 16u) + 1.0) / 65536.0));
+    let r1 = sqrt(-2.0 * log((f32(b >> 16u) + 1.0) / 65536.0));
+    let t0 = 2.0 * PI * f32(a & 65535u) / 65536.0;
+    let t1 = 2.0 * PI * f32(b & 65535u) / 65536.0;
+    return vec3<f32>(r0 * cos(t0), r0 * sin(t0), r1 * cos(t1));
 }
 
 // Sensor noise over the whole frame (the cached reference is noise-free), on every pixel the
@@ -96,15 +103,14 @@ fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= sensor.image_size.x || id.y >= sensor.image_size.y {
         return;
     }
-    if pixel_ray(vec2<f32>(f32(id.x), f32(id.y))).w == 0.0 {
+    let i = id.y * sensor.image_size.x + id.x;
+    // The reference frame marked the pixels the lens sees (camera.wgsl camera_pixel).
+    if gbuffer[5u * i + 4u].z == 0.0 {
         return;
     }
-    let i = id.y * sensor.image_size.x + id.x;
     let v = image[i];
-    var out = 255u << 24u;
-    for (var c = 0u; c < 3u; c++) {
-        let level = f32((v >> (8u * c)) & 255u) + sensor.noise * noise_sample(id.x, id.y, c, frame.noise_seed);
-        out |= u32(clamp(round(level), 0.0, 255.0)) << (8u * c);
-    }
-    image[i] = out;
+    let n = sensor.noise * noise_samples(i, frame.noise_seed);
+    let level = vec3<f32>(vec3<u32>(v, v >> 8u, v >> 16u) & vec3<u32>(255u)) + n;
+    let out = vec3<u32>(clamp(round(level), vec3<f32>(0.0), vec3<f32>(255.0)));
+    image[i] = pack_rgba(out);
 }

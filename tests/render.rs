@@ -419,6 +419,78 @@ fn noise_is_seeded() {
 }
 
 #[test]
+fn sensor_noise_is_gaussian_with_the_configured_spread() {
+    let mut c = common::paper_config();
+    c.render.noise = 2.0;
+    c.render.noise_seed = 11;
+    let mut r = Renderer::new(&Sensor::from_config("noisy", c).unwrap()).unwrap();
+    let reference = r.reference().rgba.clone();
+    // Four empty frames: noise minus the noise-free reference, where no clipping bites.
+    let mut d: Vec<[f64; 3]> = Vec::new();
+    let width = r.sensor().width as usize;
+    let mut right_neighbour: Vec<(f64, f64)> = Vec::new();
+    for _ in 0..4 {
+        let e = r.render_empty().unwrap();
+        let px = |i: usize| -> Option<[f64; 3]> {
+            let (n, q) = (&e.rgba[i * 4..i * 4 + 3], &reference[i * 4..i * 4 + 3]);
+            q.iter()
+                .all(|&v| (12..=243).contains(&v))
+                .then(|| std::array::from_fn(|c| n[c] as f64 - q[c] as f64))
+        };
+        for i in 0..reference.len() / 4 {
+            if let Some(v) = px(i) {
+                d.push(v);
+                if (i + 1) % width != 0 {
+                    if let Some(w) = px(i + 1) {
+                        right_neighbour.push((v[0], w[0]));
+                    }
+                }
+            }
+        }
+    }
+    assert!(d.len() > 500_000, "only {} noisy samples", d.len());
+    let n = d.len() as f64;
+    for c in 0..3 {
+        let mean = d.iter().map(|v| v[c]).sum::<f64>() / n;
+        let var = d.iter().map(|v| (v[c] - mean).powi(2)).sum::<f64>() / n;
+        let kurtosis = d.iter().map(|v| (v[c] - mean).powi(4)).sum::<f64>() / n / var.powi(2);
+        // 2 levels of noise, then rounding to whole levels (variance + 1/12).
+        let expected = (4.0f64 + 1.0 / 12.0).sqrt();
+        assert!(mean.abs() < 0.02, "channel {c}: mean {mean}");
+        assert!(
+            (var.sqrt() - expected).abs() < 0.04,
+            "channel {c}: std {} (expected {expected})",
+            var.sqrt()
+        );
+        // A Gaussian's kurtosis is 3 (a uniform's 1.8, a sum of four uniforms' 2.7).
+        assert!(
+            (kurtosis - 3.0).abs() < 0.1,
+            "channel {c}: kurtosis {kurtosis}"
+        );
+    }
+    let corr = |pairs: &[(f64, f64)]| {
+        let m = pairs.len() as f64;
+        let (ma, mb) = (
+            pairs.iter().map(|p| p.0).sum::<f64>() / m,
+            pairs.iter().map(|p| p.1).sum::<f64>() / m,
+        );
+        let cov = pairs.iter().map(|p| (p.0 - ma) * (p.1 - mb)).sum::<f64>() / m;
+        let va = pairs.iter().map(|p| (p.0 - ma).powi(2)).sum::<f64>() / m;
+        let vb = pairs.iter().map(|p| (p.1 - mb).powi(2)).sum::<f64>() / m;
+        cov / (va * vb).sqrt()
+    };
+    let channels: Vec<(f64, f64)> = d.iter().map(|v| (v[0], v[1])).collect();
+    let pair_b: Vec<(f64, f64)> = d.iter().map(|v| (v[1], v[2])).collect();
+    for (what, r) in [
+        ("neighbouring pixels", corr(&right_neighbour)),
+        ("red and green", corr(&channels)),
+        ("green and blue", corr(&pair_b)),
+    ] {
+        assert!(r.abs() < 0.01, "{what} correlate: {r}");
+    }
+}
+
+#[test]
 fn bad_contacts_are_refused() {
     let mut r = paper();
     for (c, what) in [

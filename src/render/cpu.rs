@@ -68,10 +68,11 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
                 continue;
             };
             let colour = leds::shade(sensor, &hit);
+            let samples = leds::noise_samples(i as u32, seed);
             for (ch, v) in colour.to_array().into_iter().enumerate() {
                 let level = leds::encode(v);
                 rgba[i * 4 + ch] = if noise > 0.0 {
-                    leds::add_noise(level, noise * leds::noise_sample(x, y, ch as u32, seed))
+                    leds::add_noise(level, noise * samples[ch])
                 } else {
                     level
                 };

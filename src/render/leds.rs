@@ -70,13 +70,20 @@ pub fn pcg_hash(input: u32) -> u32 {
     (word >> 22) ^ word
 }
 
-/// A standard-normal sample for pixel (x, y), channel `c`, from `seed` (Box-Muller on two
-/// hashed uniforms). Deterministic: the same inputs give the same value on CPU and GPU.
-pub fn noise_sample(x: u32, y: u32, c: u32, seed: u32) -> f64 {
-    let base = pcg_hash(x ^ pcg_hash(y ^ pcg_hash(c ^ pcg_hash(seed))));
-    let u1 = ((base >> 8) as f64 + 1.0) / 16_777_217.0;
-    let u2 = (pcg_hash(base) >> 8) as f64 / 16_777_216.0;
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+/// Three standard-normal samples for pixel `i` (y * width + x), one per channel, from
+/// `seed`: Box-Muller on two hashed pairs of 16-bit uniforms (tails end at 4.7 sigma).
+/// Deterministic: the same inputs give the same values on CPU and GPU (to float precision).
+pub fn noise_samples(i: u32, seed: u32) -> [f64; 3] {
+    let a = pcg_hash(i ^ pcg_hash(seed));
+    let b = pcg_hash(a);
+    let radius = |h: u32| (-2.0 * (((h >> 16) as f64 + 1.0) / 65_536.0).ln()).sqrt();
+    let angle = |h: u32| std::f64::consts::TAU * (h & 0xFFFF) as f64 / 65_536.0;
+    let (r0, r1) = (radius(a), radius(b));
+    [
+        r0 * angle(a).cos(),
+        r0 * angle(a).sin(),
+        r1 * angle(b).cos(),
+    ]
 }
 
 /// 8-bit value of a linear channel: gamma 2.2, rounded.
