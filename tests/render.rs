@@ -356,6 +356,113 @@ fn a_press_too_shallow_to_move_the_skin_renders_the_empty_finger() {
     assert!(frame.rgba != r.reference().rgba);
 }
 
+/// The footprint bounds the work of a contact frame, so it must never cut an imprint short:
+/// over the whole heightfield (not just the footprint), every texel the object pushes in,
+/// and every texel the elastomer then moves, lies inside the texel rectangle, and every pixel
+/// that sees such a texel (at the undeformed surface or at the moved skin) inside the pixel
+/// rectangle. Seven solids at the paper's eight positions, at three azimuths and spins, on
+/// the paper's sensor and on a softer gel whose imprints spread and bulge further.
+#[test]
+fn footprints_hold_every_moved_texel_and_its_pixels() {
+    let mut soft = common::paper_config();
+    soft.elastomer.blend_mm = 1.0;
+    soft.elastomer.bulge = 1.0;
+    soft.elastomer.drape_mm = 3.0;
+    // Every tap on the paper's sensor; on the soft one (its kernels are slow on the CPU) the
+    // taps along the side, whose imprints run to the lens's edge.
+    footprints_hold_moved_texels(&Sensor::preset("paper").unwrap(), 0);
+    footprints_hold_moved_texels(&Sensor::from_config("soft", soft).unwrap(), 4);
+}
+
+/// Checks the taps at the paper's positions from index `first` on.
+fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
+    let sensor = sensor.clone();
+    let grid = render::HeightfieldGrid::for_sensor(&sensor);
+    let config = &sensor.config.elastomer;
+    let reach = elastomer::blend_reach_mm(config);
+    let n = grid.texels;
+    let whole = render::Rect {
+        x: 0,
+        y: 0,
+        w: n,
+        h: n,
+    };
+    let mut checked = 0;
+    for (k, solid) in Solid::ALL.into_iter().enumerate() {
+        for (m, (place, _)) in geltip::experiment::POSITIONS.iter().enumerate() {
+            if m < first {
+                continue;
+            }
+            let c = Contact {
+                object: Arc::new(Object::Solid(solid)),
+                place: *place,
+                azimuth_deg: [0.0, 77.0, 200.0][(k + m) % 3],
+                spin_deg: [0.0, 35.0, 110.0][(k + 2 * m) % 3],
+                depth_mm: [1.0, 1.5][m % 2],
+            };
+            let what = format!("{}: {solid:?} at {place:?}", sensor.name);
+            let pose = c.pose(&sensor).unwrap();
+            let fp = render::contact::footprint(&sensor, &grid, &pose, &c.object, reach)
+                .unwrap_or_else(|| panic!("{what}: no footprint"));
+            let (t, px) = (fp.texels, fp.pixels.unwrap());
+            let p = render::contact::penetration_field(&sensor, &grid, &pose, &c.object, whole);
+            // The elastomer over the footprint grown by 30 texels (8 mm) each side.
+            let grown = render::Rect {
+                x: t.x.saturating_sub(30),
+                y: t.y.saturating_sub(30),
+                w: (t.x + t.w + 30).min(n) - t.x.saturating_sub(30),
+                h: (t.y + t.h + 30).min(n) - t.y.saturating_sub(30),
+            };
+            let meridian = elastomer::blend_meridian(&grid, config, reach, &p, grown);
+            let (h, _) = elastomer::blend_azimuth(
+                &sensor.finger,
+                &grid,
+                config,
+                reach,
+                &p,
+                &meridian,
+                grown,
+            );
+            let inside = |i: u32, j: u32| i >= t.x && i < t.x + t.w && j >= t.y && j < t.y + t.h;
+            let mut moved = 0;
+            for j in 0..n {
+                for i in 0..n {
+                    let idx = (j * n + i) as usize;
+                    if p[idx] == 0.0 && h[idx] == 0.0 {
+                        continue;
+                    }
+                    moved += 1;
+                    assert!(
+                        inside(i, j),
+                        "{what}: texel ({i}, {j}) moves (p {}, h {}) outside {t:?}",
+                        p[idx],
+                        h[idx]
+                    );
+                    let sp = sensor
+                        .finger
+                        .point_at(geltip::finger::SurfaceCoord::from_disc(
+                            grid.texel_centre(i, j),
+                        ));
+                    for depth in [0.0, h[idx] as f64] {
+                        if let Ok(q) = sensor.project(sp.point - depth * sp.normal) {
+                            assert!(
+                                q.x >= px.x as f64 - 0.5
+                                    && q.x <= (px.x + px.w) as f64 - 0.5
+                                    && q.y >= px.y as f64 - 0.5
+                                    && q.y <= (px.y + px.h) as f64 - 0.5,
+                                "{what}: texel ({i}, {j}) is seen at {q} outside {px:?}"
+                            );
+                        }
+                    }
+                }
+            }
+            assert!(moved > 20, "{what}: only {moved} texels move");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 7 * (8 - first));
+}
+
 #[test]
 fn over_pressing_is_reported() {
     let mut r = paper();

@@ -73,19 +73,19 @@ pub struct Footprint {
 }
 
 /// The pixel where the camera sees the direction of `p` (for points just outside the
-/// finger, such as a bulge, the direction is what matters), or `None` beyond the lens.
-fn pixel_towards(sensor: &Sensor, p: DVec3) -> Option<DVec2> {
+/// finger, such as a bulge, the direction is what matters), and whether the lens sees it;
+/// a direction beyond the lens gets the pixel on the lens's edge at its azimuth.
+fn pixel_towards(sensor: &Sensor, p: DVec3) -> (DVec2, bool) {
     let lateral = p.x.hypot(p.y);
     let theta = lateral.atan2(p.z);
-    if theta > sensor.lens.max_theta {
-        return None;
-    }
-    let rho = sensor.lens.project(theta);
-    Some(if lateral > 0.0 {
+    let seen = theta <= sensor.lens.max_theta;
+    let rho = sensor.lens.project(theta.min(sensor.lens.max_theta));
+    let pixel = if lateral > 0.0 {
         sensor.principal + rho * DVec2::new(p.x, p.y) / lateral
     } else {
         sensor.principal
-    })
+    };
+    (pixel, seen)
 }
 
 /// Where the object touches the finger (conservatively): coarse cells of 2x2 texels are
@@ -112,13 +112,28 @@ pub fn footprint(
     let centre = |ci: u32, cj: u32| {
         DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm - DVec2::splat(grid.half_size_mm)
     };
+    // Arc length falls as height rises, over the whole finger: only cells whose s lies
+    // between those of the heights origin.z +- reach can be within reach (a cheap first test
+    // before the trigonometry; 1 µm of slack for rounding).
+    let s_of_height = |z: f64| {
+        let (r, d) = (f.radius, f.cylinder_length);
+        if z >= d {
+            r * ((z - d) / r).clamp(-1.0, 1.0).acos()
+        } else {
+            f.junction_s() + (d - z)
+        }
+    };
+    let s_lo = s_of_height(pose.origin.z + reach) - 1e-3;
+    let s_hi = (s_of_height(pose.origin.z - reach) + 1e-3).min(grid.half_size_mm);
     let mut marked = vec![false; (cells * cells) as usize];
     for cj in 0..cells {
         for ci in 0..cells {
+            let s = centre(ci, cj).length();
+            if s < s_lo || s > s_hi {
+                continue;
+            }
             let coord = SurfaceCoord::from_disc(centre(ci, cj));
-            if coord.s > grid.half_size_mm
-                || (f.point_at(coord).point - pose.origin).length() > reach
-            {
+            if (f.point_at(coord).point - pose.origin).length() > reach {
                 continue;
             }
             marked[(cj * cells + ci) as usize] =
@@ -137,6 +152,7 @@ pub fn footprint(
     let grow = 1.1 * blend_reach_mm + cell_mm;
     let (mut disc_lo, mut disc_hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
     let (mut px_lo, mut px_hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    let mut any_seen = false;
     let depths = [
         -0.5 * f.shell_thickness,
         0.0,
@@ -178,11 +194,14 @@ pub fn footprint(
                 disc_hi = disc_hi.max(disc);
                 let sp = f.point_at(p);
                 for depth in depths {
-                    if let Some(px) = pixel_towards(sensor, sp.point - depth * sp.normal) {
-                        // Pixel centres are at integers: shift to cell space.
-                        px_lo = px_lo.min(px + DVec2::splat(0.5));
-                        px_hi = px_hi.max(px + DVec2::splat(0.5));
-                    }
+                    // Samples beyond the lens count at its edge: where the imprint runs out
+                    // of view, what is seen of it reaches the edge (a short arc, inside the
+                    // rectangle's padding).
+                    let (px, seen) = pixel_towards(sensor, sp.point - depth * sp.normal);
+                    any_seen |= seen;
+                    // Pixel centres are at integers: shift to cell space.
+                    px_lo = px_lo.min(px + DVec2::splat(0.5));
+                    px_hi = px_hi.max(px + DVec2::splat(0.5));
                 }
             }
         }
@@ -196,7 +215,7 @@ pub fn footprint(
         DVec2::ONE,
         (grid.texels, grid.texels),
     )?;
-    let pixels = if px_lo.x > px_hi.x {
+    let pixels = if !any_seen {
         None
     } else {
         Rect::covering(
