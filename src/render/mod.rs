@@ -265,10 +265,22 @@ impl Frame {
 
     /// Pixel count and bounding box of the contact mask.
     pub fn mask(&self) -> (u64, Option<[u32; 4]>) {
+        let pressed = |d: &f32| *d as f64 > MASK_THRESHOLD_MM;
+        // The mask is a small part of the frame: find where it starts and ends first.
+        let Some(first) = self.indentation.iter().position(pressed) else {
+            return (0, None);
+        };
+        let last = self.indentation.iter().rposition(pressed).unwrap_or(first);
         let mut count = 0;
         let mut bbox: Option<[u32; 4]> = None;
-        for (i, &d) in self.indentation.iter().enumerate() {
-            if d as f64 > MASK_THRESHOLD_MM {
+        for (i, &d) in self
+            .indentation
+            .iter()
+            .enumerate()
+            .take(last + 1)
+            .skip(first)
+        {
+            if pressed(&d) {
                 count += 1;
                 let (u, v) = (i as u32 % self.width, i as u32 / self.width);
                 bbox = Some(match bbox {
@@ -362,5 +374,43 @@ impl Rect {
 
     pub fn area(&self) -> u64 {
         self.w as u64 * self.h as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(pressed: &[(u32, u32, f32)]) -> Frame {
+        let (width, height) = (7, 5);
+        let mut indentation = vec![0.0; (width * height) as usize];
+        for &(x, y, d) in pressed {
+            indentation[(y * width + x) as usize] = d;
+        }
+        Frame {
+            width,
+            height,
+            rgba: vec![0; (width * height * 4) as usize],
+            indentation,
+        }
+    }
+
+    #[test]
+    fn mask_counts_pressed_pixels_and_bounds_them() {
+        assert_eq!(frame(&[]).mask(), (0, None));
+        // At the threshold is not pressed; just past it is.
+        assert_eq!(frame(&[(3, 2, MASK_THRESHOLD_MM as f32)]).mask(), (0, None));
+        assert_eq!(frame(&[(3, 2, 0.02)]).mask(), (1, Some([3, 2, 3, 2])));
+        // First and last pixels of the frame, a bump out (negative) ignored, in between.
+        let f = frame(&[
+            (0, 0, 0.5),
+            (6, 4, 0.3),
+            (5, 1, -0.4),
+            (2, 3, 0.2),
+            (6, 0, 0.1),
+        ]);
+        assert_eq!(f.mask(), (4, Some([0, 0, 6, 4])));
+        let f = frame(&[(4, 1, 0.5), (1, 3, 0.3), (5, 2, 0.2)]);
+        assert_eq!(f.mask(), (3, Some([1, 1, 5, 3])));
     }
 }
