@@ -4,10 +4,6 @@
 // Writes the G-buffer the LED stage shades. Mirror: src/render/camera.rs.
 
 const BISECTION_STEPS: u32 = 6u;
-// Vec4s per pixel in the G-buffer: (skin point, indentation), (ray, flag), (normal, -), and,
-// written once by the reference frame, the disc positions of the ray's three probes (then
-// 1, 0: the last vec4's z marks the pixels the lens sees).
-const GBUFFER_STRIDE: u32 = 5u;
 
 // Where a ray's stretch of shell is probed for deformation: its ends and middle, as disc
 // positions. Mirror: src/render/camera.rs UNTOUCHED_PROBES.

@@ -42,16 +42,16 @@ fn pack_rgba(c: vec3<u32>) -> u32 {
     return c.x | (c.y << 8u) | (c.z << 16u) | (255u << 24u);
 }
 
-// One pixel from its G-buffer row (stride: camera.wgsl GBUFFER_STRIDE).
+// One pixel from its G-buffer row.
 fn leds_pixel(i: u32) {
-    let g0 = gbuffer[5u * i];
-    let g1 = gbuffer[5u * i + 1u];
+    let g0 = gbuffer[GBUFFER_STRIDE * i];
+    let g1 = gbuffer[GBUFFER_STRIDE * i + 1u];
     if g1.w == 0.0 {
         image[i] = pack_rgba(vec3<u32>(0u));
         indentation[i] = 0.0;
         return;
     }
-    let colour = shade(g0.xyz, gbuffer[5u * i + 2u].xyz, g1.xyz);
+    let colour = shade(g0.xyz, gbuffer[GBUFFER_STRIDE * i + 2u].xyz, g1.xyz);
     image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
     indentation[i] = g0.w;
 }
@@ -105,7 +105,7 @@ fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = id.y * sensor.image_size.x + id.x;
     // The reference frame marked the pixels the lens sees (camera.wgsl camera_pixel).
-    if gbuffer[5u * i + 4u].z == 0.0 {
+    if gbuffer[GBUFFER_STRIDE * i + 4u].z == 0.0 {
         return;
     }
     let v = image[i];

@@ -116,7 +116,7 @@ const COUNTER_HEADER_BYTES: u64 = TOUCHED_LIST * 4;
 /// Bytes of one frame's indirect dispatch arguments (three words, 16-byte stride).
 const DISPATCH_ARGS_BYTES: u64 = 16;
 
-/// Five vec4 per pixel (camera.wgsl `GBUFFER_STRIDE`).
+/// Five vec4 per pixel (shaders/shared/common.wgsl `GBUFFER_STRIDE`).
 const GBUFFER_BYTES_PER_PIXEL: u64 = 5 * 16;
 
 fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
