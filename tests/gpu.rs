@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use geltip::gpu::readback::{read_texture_region, Readback};
+use geltip::gpu::readback::{read_ranges_with, read_texture_region, Readback};
 use geltip::gpu::shaders::create_compute_pipeline_from_source;
 use geltip::gpu::{create_compute_pipeline, read_buffer, read_texture, GpuContext};
 use geltip::GeltipError;
@@ -339,6 +339,49 @@ fn storage_buffer_reads_back() {
         });
     let e = read_buffer::<u32>(ctx, &no_copy, 0, 4).unwrap_err();
     assert!(e.to_string().contains("COPY_SRC"), "{e}");
+}
+
+#[test]
+fn ranges_read_back_through_a_kept_staging_buffer() {
+    let ctx = ctx();
+    let n = 1000u32;
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test data"),
+        size: u64::from(n) * 4,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let encoder = encode_buffer_pass(ctx, "inline.wgsl", PATTERN_BUFFER, &buffer, n.div_ceil(64));
+    ctx.submit_and_wait("buffer fill", encoder).unwrap();
+    let expected = |i: u32| i.wrapping_mul(2654435761).wrapping_add(12345);
+    let staging = |size: u64| {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("kept staging"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    };
+    let ranges = [(&buffer, 0, 40), (&buffer, 400, 12), (&buffer, 3996, 4)];
+    // Each range is handed over in order, with its index, and unpacked by the caller.
+    let read = |kept: Option<&wgpu::Buffer>| {
+        read_ranges_with(ctx, kept, &ranges, |k, bytes| {
+            (k, bytemuck::pod_collect_to_vec::<u8, u32>(bytes))
+        })
+        .unwrap()
+    };
+    let want = vec![
+        (0, (0..10).map(expected).collect::<Vec<_>>()),
+        (1, (100..103).map(expected).collect()),
+        (2, vec![expected(999)]),
+    ];
+    let kept = staging(1024);
+    // Twice through the same staging buffer (it is unmapped after each read), once through
+    // one too small for the ranges (a fresh one is used instead), once with none.
+    assert_eq!(read(Some(&kept)), want);
+    assert_eq!(read(Some(&kept)), want);
+    assert_eq!(read(Some(&staging(16))), want);
+    assert_eq!(read(None), want);
 }
 
 #[test]

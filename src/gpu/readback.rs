@@ -106,23 +106,14 @@ pub fn read_buffer<T: bytemuck::Pod>(
 /// buffer needs `BufferUsages::COPY_SRC`; offsets must be multiples of 4
 /// ([`wgpu::COPY_BUFFER_ALIGNMENT`]). Returns the bytes of each range, in order.
 pub fn read_ranges(ctx: &GpuContext, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<Vec<u8>>> {
-    read_ranges_via(ctx, None, ranges)
+    read_ranges_with(ctx, None, ranges, |_, bytes| bytes.to_vec())
 }
 
-/// [`read_ranges`] through `staging` (`MAP_READ | COPY_DST`, unmapped) when it is big
-/// enough, else through a fresh staging buffer: a caller that reads the same amount again
-/// and again keeps one and saves the allocation (megabytes of fresh pages per read on a
-/// software device).
-pub fn read_ranges_via(
-    ctx: &GpuContext,
-    staging: Option<&wgpu::Buffer>,
-    ranges: &[(&wgpu::Buffer, u64, u64)],
-) -> Result<Vec<Vec<u8>>> {
-    read_ranges_with(ctx, staging, ranges, |_, bytes| bytes.to_vec())
-}
-
-/// [`read_ranges_via`] handing each range's bytes, still mapped, to `unpack(index, bytes)`,
-/// so that the caller copies them once, straight into what it keeps.
+/// [`read_ranges`] handing each range's bytes, still mapped, to `unpack(index, bytes)`, so
+/// that the caller copies them once, straight into what it keeps; through `staging`
+/// (`MAP_READ | COPY_DST`, unmapped) when it is big enough, else through a fresh staging
+/// buffer: a caller that reads the same amount again and again keeps one and saves the
+/// allocation (megabytes of fresh pages per read on a software device).
 pub fn read_ranges_with<R>(
     ctx: &GpuContext,
     staging: Option<&wgpu::Buffer>,
