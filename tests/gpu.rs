@@ -305,10 +305,13 @@ fn reusable_readback_with_the_frame() {
     assert!(readback.read(ctx, &small).is_err());
 }
 
-#[test]
-fn storage_buffer_reads_back() {
-    let ctx = ctx();
-    let n = 1000u32;
+/// Word `i` of the buffer `PATTERN_BUFFER` fills.
+fn expected_word(i: u32) -> u32 {
+    i.wrapping_mul(2654435761).wrapping_add(12345)
+}
+
+/// A storage buffer of `n` words filled on the GPU by `PATTERN_BUFFER`.
+fn pattern_buffer(ctx: &GpuContext, n: u32) -> wgpu::Buffer {
     let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("test data"),
         size: u64::from(n) * 4,
@@ -317,15 +320,21 @@ fn storage_buffer_reads_back() {
     });
     let encoder = encode_buffer_pass(ctx, "inline.wgsl", PATTERN_BUFFER, &buffer, n.div_ceil(64));
     ctx.submit_and_wait("buffer fill", encoder).unwrap();
+    buffer
+}
 
-    let expected = |i: u32| i.wrapping_mul(2654435761).wrapping_add(12345);
+#[test]
+fn storage_buffer_reads_back() {
+    let ctx = ctx();
+    let n = 1000u32;
+    let buffer = pattern_buffer(ctx, n);
     let all: Vec<u32> = read_buffer(ctx, &buffer, 0, n as usize).unwrap();
-    assert_eq!(all, (0..n).map(expected).collect::<Vec<_>>());
+    assert_eq!(all, (0..n).map(expected_word).collect::<Vec<_>>());
     let part: Vec<u32> = read_buffer(ctx, &buffer, 40, 7).unwrap();
-    assert_eq!(part, (10..17).map(expected).collect::<Vec<_>>());
+    assert_eq!(part, (10..17).map(expected_word).collect::<Vec<_>>());
     // Values smaller than the 4-byte copy unit.
     let bytes: Vec<u8> = read_buffer(ctx, &buffer, 4, 3).unwrap();
-    assert_eq!(bytes, expected(1).to_le_bytes()[..3]);
+    assert_eq!(bytes, expected_word(1).to_le_bytes()[..3]);
     assert!(read_buffer::<u32>(ctx, &buffer, 0, 0).unwrap().is_empty());
     // Misuse is an error, not a panic or a wgpu validation error.
     assert!(read_buffer::<u32>(ctx, &buffer, 2, 1).is_err());
@@ -345,15 +354,7 @@ fn storage_buffer_reads_back() {
 fn ranges_read_back_through_a_kept_staging_buffer() {
     let ctx = ctx();
     let n = 1000u32;
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test data"),
-        size: u64::from(n) * 4,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let encoder = encode_buffer_pass(ctx, "inline.wgsl", PATTERN_BUFFER, &buffer, n.div_ceil(64));
-    ctx.submit_and_wait("buffer fill", encoder).unwrap();
-    let expected = |i: u32| i.wrapping_mul(2654435761).wrapping_add(12345);
+    let buffer = pattern_buffer(ctx, n);
     let staging = |size: u64| {
         ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("kept staging"),
@@ -371,9 +372,9 @@ fn ranges_read_back_through_a_kept_staging_buffer() {
         .unwrap()
     };
     let want = vec![
-        (0, (0..10).map(expected).collect::<Vec<_>>()),
-        (1, (100..103).map(expected).collect()),
-        (2, vec![expected(999)]),
+        (0, (0..10).map(expected_word).collect::<Vec<_>>()),
+        (1, (100..103).map(expected_word).collect()),
+        (2, vec![expected_word(999)]),
     ];
     let kept = staging(1024);
     // Twice through the same staging buffer (it is unmapped after each read), once through
