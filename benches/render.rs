@@ -8,7 +8,7 @@
 //! pixels re-rendered per frame. Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps.
 
-use geltip::experiment::{self, Protocol};
+use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::Solid;
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
 use geltip::render::Contact;

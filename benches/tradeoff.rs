@@ -7,7 +7,7 @@
 //! the mean absolute difference of the 8-bit channels inside the re-rendered region, and the
 //! mean error of the indentation map (mm) where either render is pressed.
 
-use geltip::experiment::{self, Protocol};
+use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::Solid;
 use geltip::render::gpu::Renderer;
 use geltip::render::{Contact, Frame};

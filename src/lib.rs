@@ -4,7 +4,6 @@
 //! [`sensor`] projection map; the [`paper`] module keeps the paper's printed formula to
 //! show where it goes wrong.
 pub mod error;
-pub mod experiment;
 pub mod finger;
 pub mod lens;
 pub mod paper;
@@ -15,7 +14,9 @@ pub use finger::{Finger, Region, SurfaceCoord, SurfacePoint};
 pub use lens::{Lens, LensModel};
 pub use sensor::{NotVisible, Sensor, SensorConfig};
 pub mod gpu;
+pub mod jobs;
 pub mod localise;
 pub mod object;
 pub mod output;
+pub mod plot;
 pub mod render;

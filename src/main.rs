@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use geltip::experiment::{self, Protocol};
+use geltip::jobs::experiment::{self, Protocol};
 use geltip::localise::{load_frame, localise, Method};
 use geltip::object::{Object, Solid};
 use geltip::output;

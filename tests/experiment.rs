@@ -1,6 +1,6 @@
 //! The localisers on rendered images, and the paper's experiment end to end.
 
-use geltip::experiment::{self, Protocol, POSITIONS};
+use geltip::jobs::experiment::{self, Protocol, POSITIONS};
 use geltip::localise::{Localiser, Method};
 use geltip::object::{Object, Solid};
 use geltip::render::gpu::Renderer;

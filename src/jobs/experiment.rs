@@ -7,6 +7,7 @@ use crate::error::{GeltipError, Result};
 use crate::localise::{Localiser, Method};
 use crate::object::{Object, Solid};
 use crate::output;
+use crate::plot;
 use crate::render::gpu::Renderer;
 use crate::render::{Contact, GroundTruth, Place};
 use crate::sensor::Sensor;
@@ -359,51 +360,42 @@ struct Series {
 /// Error per position per method, with the paper's published numbers, as an SVG chart.
 pub fn chart_svg(report: &Report) -> Result<String> {
     use plotters::prelude::*;
-    let mut svg = String::new();
-    let chart_err = |e: &dyn std::fmt::Display| GeltipError::input("chart", e.to_string());
-    {
-        let root = SVGBackend::with_string(&mut svg, (900, 480)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| chart_err(&e))?;
-        let mut series = vec![Series {
-            name: "paper (published)".into(),
-            colour: RGBColor(120, 120, 120),
-            points: PAPER_PER_POSITION
-                .iter()
-                .enumerate()
-                .map(|(i, (m, s))| (i, *m, *s))
-                .collect(),
-            missed: vec![],
-        }];
-        let colours = [
-            RGBColor(214, 39, 40),
-            RGBColor(31, 119, 180),
-            RGBColor(44, 160, 44),
-        ];
-        for (k, &m) in report.protocol.methods.iter().enumerate() {
-            let mut points = Vec::new();
-            let mut missed = Vec::new();
-            for p in 0..POSITIONS.len() {
-                let s = report.summary(m, |t| t.position == p);
-                if s.detected > 0 {
-                    points.push((p, s.mean, s.std));
-                }
-                if s.missed > 0 {
-                    missed.push(p);
-                }
-            }
-            series.push(Series {
-                name: format!("{} detector (geltip)", m.name()),
-                colour: colours[k % colours.len()],
-                points,
-                missed,
-            });
-        }
-        let top = series
+    let mut series = vec![Series {
+        name: "paper (published)".into(),
+        colour: plot::REFERENCE_GREY,
+        points: PAPER_PER_POSITION
             .iter()
-            .flat_map(|s| s.points.iter().map(|(_, m, sd)| m + sd))
-            .fold(1.0f64, f64::max)
-            * 1.1;
-        let mut chart = ChartBuilder::on(&root)
+            .enumerate()
+            .map(|(i, (m, s))| (i, *m, *s))
+            .collect(),
+        missed: vec![],
+    }];
+    for (k, &m) in report.protocol.methods.iter().enumerate() {
+        let mut points = Vec::new();
+        let mut missed = Vec::new();
+        for p in 0..POSITIONS.len() {
+            let s = report.summary(m, |t| t.position == p);
+            if s.detected > 0 {
+                points.push((p, s.mean, s.std));
+            }
+            if s.missed > 0 {
+                missed.push(p);
+            }
+        }
+        series.push(Series {
+            name: format!("{} detector (geltip)", m.name()),
+            colour: plot::colour(k),
+            points,
+            missed,
+        });
+    }
+    let top = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|(_, m, sd)| m + sd))
+        .fold(1.0f64, f64::max)
+        * 1.1;
+    plot::svg("errors per position", (900, 480), |root| {
+        let mut chart = ChartBuilder::on(root)
             .caption(
                 "Localisation error per tap position (mean ± std, mm; × = missed taps)",
                 ("sans-serif", 20),
@@ -411,8 +403,7 @@ pub fn chart_svg(report: &Report) -> Result<String> {
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(50)
-            .build_cartesian_2d(-0.5f64..7.5f64, 0f64..top)
-            .map_err(|e| chart_err(&e))?;
+            .build_cartesian_2d(-0.5f64..7.5f64, 0f64..top)?;
         chart
             .configure_mesh()
             .x_labels(8)
@@ -425,8 +416,7 @@ pub fn chart_svg(report: &Report) -> Result<String> {
                 }
             })
             .y_desc("error (mm)")
-            .draw()
-            .map_err(|e| chart_err(&e))?;
+            .draw()?;
         let n = series.len() as f64;
         for (k, line) in series.iter().enumerate() {
             let dx = (k as f64 - (n - 1.0) / 2.0) * 0.18;
@@ -434,26 +424,21 @@ pub fn chart_svg(report: &Report) -> Result<String> {
             chart
                 .draw_series(line.points.iter().map(|&(p, m, s)| {
                     ErrorBar::new_vertical(p as f64 + dx, (m - s).max(0.0), m, m + s, c.filled(), 6)
-                }))
-                .map_err(|e| chart_err(&e))?
+                }))?
                 .label(line.name.clone())
                 .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
-            chart
-                .draw_series(
-                    line.missed
-                        .iter()
-                        .map(|&p| Cross::new((p as f64 + dx, top * 0.02), 6, c.stroke_width(2))),
-                )
-                .map_err(|e| chart_err(&e))?;
+            chart.draw_series(
+                line.missed
+                    .iter()
+                    .map(|&p| Cross::new((p as f64 + dx, top * 0.02), 6, c.stroke_width(2))),
+            )?;
         }
         chart
             .configure_series_labels()
             .border_style(BLACK)
             .background_style(WHITE.mix(0.9))
             .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(|e| chart_err(&e))?;
-        root.present().map_err(|e| chart_err(&e))?;
-    }
-    Ok(svg)
+            .draw()?;
+        Ok(())
+    })
 }

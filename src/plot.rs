@@ -1,0 +1,48 @@
+//! Charts shared by the jobs: one palette, one way to draw an SVG into a string, and chart
+//! errors as [`GeltipError`]s.
+
+use crate::error::{GeltipError, Result};
+use plotters::prelude::*;
+
+/// Series colours, in order (matplotlib's first colours, which users of these charts know).
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(214, 39, 40),
+    RGBColor(31, 119, 180),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+/// Grey for published or reference figures drawn beside ours.
+pub const REFERENCE_GREY: RGBColor = RGBColor(120, 120, 120);
+
+/// Colour of series `k`.
+pub fn colour(k: usize) -> RGBColor {
+    PALETTE[k % PALETTE.len()]
+}
+
+/// A plotting error as a one-line [`GeltipError`] naming the chart.
+pub fn chart_error(chart: &str, e: impl std::fmt::Display) -> GeltipError {
+    GeltipError::input(format!("chart {chart}"), e.to_string())
+}
+
+/// Draws an SVG of `size` pixels with `draw` (given a white canvas) and returns its text.
+pub fn svg(
+    chart: &str,
+    size: (u32, u32),
+    draw: impl FnOnce(
+        &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    ) -> std::result::Result<(), Box<dyn std::error::Error>>,
+) -> Result<String> {
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| chart_error(chart, e))?;
+        draw(&root).map_err(|e| chart_error(chart, e))?;
+        root.present().map_err(|e| chart_error(chart, e))?;
+    }
+    Ok(text)
+}
