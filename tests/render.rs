@@ -389,7 +389,7 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
     };
     let mut checked = 0;
     for (k, solid) in Solid::ALL.into_iter().enumerate() {
-        for (m, (place, _)) in geltip::experiment::POSITIONS.iter().enumerate() {
+        for (m, (place, _)) in geltip::jobs::experiment::POSITIONS.iter().enumerate() {
             if m < first {
                 continue;
             }
