@@ -24,9 +24,7 @@ fn ray_probes(dir: vec3<f32>) -> Probes {
 }
 
 fn height_at_disc(u: vec2<f32>) -> f32 {
-    let t = bilinear_taps(texel_of(u));
-    return t.weight.x * height[t.index.x] + t.weight.y * height[t.index.y]
-        + t.weight.z * height[t.index.z] + t.weight.w * height[t.index.w];
+    return sample_map(height_map, texel_of(u)).x;
 }
 
 // The largest displacement the probes see.
@@ -80,9 +78,7 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
 // Outward normal of the deformed skin: the undeformed normal plus the interpolated offset.
 fn skin_normal(c: vec2<f32>) -> vec3<f32> {
     let n0 = surface_normal(c);
-    let t = bilinear_taps(texel_of(disc_of(c)));
-    let offset = t.weight.x * elastomer_scratch[t.index.x].xyz + t.weight.y * elastomer_scratch[t.index.y].xyz
-        + t.weight.z * elastomer_scratch[t.index.z].xyz + t.weight.w * elastomer_scratch[t.index.w].xyz;
+    let offset = sample_map(elastomer_map, texel_of(disc_of(c))).xyz;
     let n = n0 + offset;
     let len = length(n);
     if len == 0.0 {

@@ -6,15 +6,11 @@
 // then parallels), kernels in surface millimetres. Mirror: src/render/elastomer.rs.
 
 fn sample_penetration(t: vec2<f32>) -> f32 {
-    let b = bilinear_taps(t);
-    return b.weight.x * penetration[b.index.x] + b.weight.y * penetration[b.index.y]
-        + b.weight.z * penetration[b.index.z] + b.weight.w * penetration[b.index.w];
+    return sample_map(penetration_map, t).x;
 }
 
 fn sample_meridian(t: vec2<f32>) -> vec2<f32> {
-    let b = bilinear_taps(t);
-    return b.weight.x * elastomer_scratch[b.index.x].xy + b.weight.y * elastomer_scratch[b.index.y].xy
-        + b.weight.z * elastomer_scratch[b.index.z].xy + b.weight.w * elastomer_scratch[b.index.w].xy;
+    return sample_map(elastomer_map, t).xy;
 }
 
 // Weights of the narrow (x) and wide (y) Gaussians at surface offset x (tap k).

@@ -103,6 +103,14 @@ const GBUFFER_STRIDE: u32 = 5u;
 @group(0) @binding(8) var<storage, read> sdf_grid: array<f32>;
 // The frame's counters and its touched-pixel list: words below (mirror: src/render/gpu.rs).
 @group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
+// What the heightfield's samplers read (taps along the surface, steps along a ray): copies of
+// the three buffers above as textures, refreshed after each stage that writes them
+// (src/render/gpu.rs). Why: llvmpipe (Mesa 22) loads a storage buffer at an index that
+// differs between invocations one invocation at a time, with two branches each, while it
+// fetches texels for all eight lanes at once.
+@group(0) @binding(10) var penetration_map: texture_2d<f32>;
+@group(0) @binding(11) var elastomer_map: texture_2d<f32>;
+@group(0) @binding(12) var height_map: texture_2d<f32>;
 
 // Texels pressed beyond the shell.
 const OVER_PRESSED: u32 = 0u;
@@ -292,12 +300,13 @@ fn texel_of(disc: vec2<f32>) -> vec2<f32> {
     return (disc + sensor.half_size_mm) / sensor.texel_mm;
 }
 
-// Bilinear interpolation weights and the four texel indices around continuous texel
-// coordinates t (centres at +0.5), in the order (x, y), (x+1, y), (x, y+1), (x+1, y+1).
-// A tap outside the grid gets weight 0 and index 0, so a sampler is a plain weighted sum of
-// four loads: no branches, no dynamic indexing (both slow on CPU drivers such as lavapipe).
+// Bilinear interpolation at continuous texel coordinates t (centres at +0.5) over the four
+// texels (x, y), (x+1, y), (x, y+1), (x+1, y+1): their coordinates clamped into the grid and
+// their weights, 0 for a texel outside it, so a sample is a plain weighted sum of four
+// fetches with no branches (mirror: src/render/elastomer.rs bilinear_taps).
 struct Taps {
-    index: vec4<u32>,
+    x: vec4<i32>,
+    y: vec4<i32>,
     weight: vec4<f32>,
 }
 
@@ -312,6 +321,16 @@ fn bilinear_taps(t: vec2<f32>) -> Taps {
     let weight = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
     var out: Taps;
     out.weight = select(vec4<f32>(0.0), weight, inside);
-    out.index = select(vec4<u32>(0u), vec4<u32>(y * n + x), inside);
+    out.x = clamp(x, vec4<i32>(0), vec4<i32>(n - 1));
+    out.y = clamp(y, vec4<i32>(0), vec4<i32>(n - 1));
     return out;
+}
+
+// Bilinear sample of a heightfield map, zero outside the grid.
+fn sample_map(map: texture_2d<f32>, t: vec2<f32>) -> vec4<f32> {
+    let b = bilinear_taps(t);
+    return b.weight.x * textureLoad(map, vec2<i32>(b.x.x, b.y.x), 0)
+        + b.weight.y * textureLoad(map, vec2<i32>(b.x.y, b.y.y), 0)
+        + b.weight.z * textureLoad(map, vec2<i32>(b.x.z, b.y.z), 0)
+        + b.weight.w * textureLoad(map, vec2<i32>(b.x.w, b.y.w), 0);
 }

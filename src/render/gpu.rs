@@ -84,6 +84,11 @@ pub struct Renderer {
     penetration: wgpu::Buffer,
     elastomer_scratch: wgpu::Buffer,
     height: wgpu::Buffer,
+    /// The heightfield as the samplers read it: textures refreshed from the three buffers
+    /// above after each stage that writes them (see `shaders/shared/common.wgsl`).
+    maps: [HeightfieldMap; 3],
+    /// Texels the maps may hold non-zero (the last contact's texel rect).
+    dirty: Option<Rect>,
     gbuffer: wgpu::Buffer,
     image: wgpu::Buffer,
     indentation: wgpu::Buffer,
@@ -104,6 +109,49 @@ pub struct Renderer {
     reference: Frame,
     seed_counter: u32,
     timings: Timings,
+}
+
+/// One texture copy of a heightfield buffer and the bytes per texel of both.
+struct HeightfieldMap {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    texel_bytes: u32,
+}
+
+/// The maps, in the order of their bindings (10, 11, 12) and of `Renderer::maps`.
+#[derive(Clone, Copy)]
+enum Map {
+    Penetration = 0,
+    Elastomer = 1,
+    Height = 2,
+}
+
+fn heightfield_map(
+    ctx: &GpuContext,
+    label: &str,
+    texels: u32,
+    format: wgpu::TextureFormat,
+) -> HeightfieldMap {
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: texels,
+            height: texels,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&Default::default());
+    HeightfieldMap {
+        texture,
+        view,
+        texel_bytes: format.block_copy_size(None).unwrap_or(4),
+    }
 }
 
 /// Words of a frame's `counters` slice (shaders/shared/common.wgsl).
@@ -139,6 +187,19 @@ fn layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLay
             ty,
             has_dynamic_offset: false,
             min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn map_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
         },
         count: None,
     }
@@ -203,6 +264,9 @@ impl Renderer {
             layout_entry(7, Storage { read_only: false }),
             layout_entry(8, Storage { read_only: true }),
             layout_entry(9, Storage { read_only: false }),
+            map_entry(10),
+            map_entry(11),
+            map_entry(12),
         ];
         let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
             let layout = ctx
@@ -255,6 +319,13 @@ impl Renderer {
             penetration: storage(ctx, "geltip penetration", texels * 4, none),
             elastomer_scratch: storage(ctx, "geltip elastomer scratch", texels * 16, none),
             height: storage(ctx, "geltip height", texels * 4, none),
+            maps: [
+                ("geltip penetration map", wgpu::TextureFormat::R32Float),
+                ("geltip elastomer map", wgpu::TextureFormat::Rgba32Float),
+                ("geltip height map", wgpu::TextureFormat::R32Float),
+            ]
+            .map(|(label, format)| heightfield_map(ctx, label, grid.texels, format)),
+            dirty: None,
             gbuffer: storage(
                 ctx,
                 "geltip gbuffer",
@@ -349,6 +420,7 @@ impl Renderer {
         fn whole(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
             b.as_entire_binding()
         }
+        let map = |m: Map| wgpu::BindingResource::TextureView(&self.maps[m as usize].view);
         let resources = [
             whole(&self.sensor_buffer),
             whole(uniform),
@@ -364,6 +436,9 @@ impl Renderer {
                 slot * self.counter_bytes,
                 self.counter_bytes,
             ),
+            map(Map::Penetration),
+            map(Map::Elastomer),
+            map(Map::Height),
         ];
         let entries: Vec<wgpu::BindGroupEntry> = resources
             .into_iter()
@@ -461,10 +536,108 @@ impl Renderer {
         );
     }
 
-    fn clear_heightfield(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.clear_buffer(&self.penetration, 0, None);
-        encoder.clear_buffer(&self.elastomer_scratch, 0, None);
-        encoder.clear_buffer(&self.height, 0, None);
+    /// Zeroes the heightfield buffers' rows `rect` spans (all of them without a rect).
+    fn clear_heightfield(&self, encoder: &mut wgpu::CommandEncoder, rect: Option<Rect>) {
+        let row = self.grid.texels as u64;
+        for (buffer, bytes) in [
+            (&self.penetration, 4),
+            (&self.elastomer_scratch, 16),
+            (&self.height, 4),
+        ] {
+            match rect {
+                Some(r) => encoder.clear_buffer(
+                    buffer,
+                    r.y as u64 * row * bytes,
+                    Some(r.h as u64 * row * bytes),
+                ),
+                None => encoder.clear_buffer(buffer, 0, None),
+            }
+        }
+    }
+
+    /// Copies `rect` of the buffer behind `map` into the map (all of it without a rect).
+    fn copy_to_map(&self, encoder: &mut wgpu::CommandEncoder, map: Map, rect: Option<Rect>) {
+        let n = self.grid.texels;
+        let r = rect.unwrap_or(Rect {
+            x: 0,
+            y: 0,
+            w: n,
+            h: n,
+        });
+        let target = &self.maps[map as usize];
+        let buffer = match map {
+            Map::Penetration => &self.penetration,
+            Map::Elastomer => &self.elastomer_scratch,
+            Map::Height => &self.height,
+        };
+        let bytes = target.texel_bytes;
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: (r.y as u64 * n as u64 + r.x as u64) * bytes as u64,
+                    bytes_per_row: Some(n * bytes),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::TexelCopyTextureInfo {
+                texture: &target.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: r.x,
+                    y: r.y,
+                    z: 0,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width: r.w,
+                height: r.h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// A contact's heightfield stages over its texel rect `t`: the penetration, the
+    /// elastomer's two passes and the skin's normals, each followed by the copy of what it
+    /// wrote into its map. `region` covers `t` and whatever the maps still hold from the last
+    /// contact, so the maps are zero outside `t` afterwards.
+    fn record_heightfield(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        t: Rect,
+        region: Rect,
+    ) {
+        for (_, pipeline, map) in self.heightfield_stages() {
+            self.record_texels(encoder, bind, pipeline, map, t, region);
+        }
+    }
+
+    /// The heightfield stages in order: name, pipeline, and the map its output refreshes.
+    fn heightfield_stages(&self) -> [(&'static str, &wgpu::ComputePipeline, Map); 4] {
+        let p = &self.pipelines;
+        [
+            ("contact", &p.contact, Map::Penetration),
+            ("elastomer: meridians", &p.blend_meridian, Map::Elastomer),
+            ("elastomer: parallels", &p.blend_azimuth, Map::Height),
+            ("elastomer: skin normals", &p.skin_normals, Map::Elastomer),
+        ]
+    }
+
+    /// One heightfield stage over `t`, then the copy of `region` of its output into `map`.
+    fn record_texels(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        pipeline: &wgpu::ComputePipeline,
+        map: Map,
+        t: Rect,
+        region: Rect,
+    ) {
+        let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
+        Self::dispatch(encoder, pipeline, bind, g);
+        self.copy_to_map(encoder, map, Some(region));
     }
 
     /// Renders the empty finger again, every pixel (the renderer does this once at start-up;
@@ -474,7 +647,11 @@ impl Renderer {
         let uniform = self.uniform_buffer(&FrameUniform::reference(&self.sensor, 0));
         let bind = self.bind_group(&uniform, 0, None);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        self.clear_heightfield(&mut encoder);
+        self.clear_heightfield(&mut encoder, None);
+        for map in [Map::Penetration, Map::Elastomer, Map::Height] {
+            self.copy_to_map(&mut encoder, map, None);
+        }
+        self.dirty = None;
         let (w, h) = (self.sensor.width, self.sensor.height);
         Self::dispatch(
             &mut encoder,
@@ -683,12 +860,10 @@ impl Renderer {
                 Some(COUNTER_HEADER_BYTES),
             );
             if let Some(t) = p.texel_rect {
-                self.clear_heightfield(&mut encoder);
-                let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
-                Self::dispatch(&mut encoder, &self.pipelines.contact, bind, g);
-                Self::dispatch(&mut encoder, &self.pipelines.blend_meridian, bind, g);
-                Self::dispatch(&mut encoder, &self.pipelines.blend_azimuth, bind, g);
-                Self::dispatch(&mut encoder, &self.pipelines.skin_normals, bind, g);
+                let region = self.dirty.map_or(t, |d| d.union(&t));
+                self.clear_heightfield(&mut encoder, Some(region));
+                self.record_heightfield(&mut encoder, bind, t, region);
+                self.dirty = Some(t);
             }
             if let Some(r) = p.pixel_rect {
                 self.record_touched(&mut encoder, bind, slot as u64, r);
@@ -781,33 +956,23 @@ impl Renderer {
         let p = self.prepare(contact, 0)?;
         let uniform = self.uniform_buffer(&p.uniform);
         let bind = self.bind_group(&uniform, 0, Some(&p.object));
-        let t = p
-            .texel_rect
-            .map(|t| (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP)))
-            .unwrap_or((0, 0));
+        let region = match (self.dirty, p.texel_rect) {
+            (Some(d), Some(t)) => Some(d.union(&t)),
+            (d, t) => d.or(t),
+        };
         let pipelines = &self.pipelines;
         enum Step<'a> {
             Clear,
-            Texels(&'a wgpu::ComputePipeline),
+            Texels(&'a wgpu::ComputePipeline, Map),
             Select,
             Touched(&'a wgpu::ComputePipeline),
             Readback,
         }
-        let stages = [
-            ("copy reference + clear", Step::Clear),
-            ("contact", Step::Texels(&pipelines.contact)),
-            (
-                "elastomer: meridians",
-                Step::Texels(&pipelines.blend_meridian),
-            ),
-            (
-                "elastomer: parallels",
-                Step::Texels(&pipelines.blend_azimuth),
-            ),
-            (
-                "elastomer: skin normals",
-                Step::Texels(&pipelines.skin_normals),
-            ),
+        let mut stages = vec![("copy reference + clear", Step::Clear)];
+        for (name, pipeline, map) in self.heightfield_stages() {
+            stages.push((name, Step::Texels(pipeline, map)));
+        }
+        stages.extend([
             ("camera: select touched", Step::Select),
             (
                 "camera: touched pixels",
@@ -818,7 +983,7 @@ impl Renderer {
                 Step::Touched(&pipelines.leds_touched),
             ),
             ("readback", Step::Readback),
-        ];
+        ]);
         let mut out = Vec::new();
         for (name, step) in stages {
             let start = Instant::now();
@@ -839,9 +1004,15 @@ impl Renderer {
                     );
                     encoder.clear_buffer(&self.indentation, 0, Some(self.slot_bytes));
                     encoder.clear_buffer(&self.counters, 0, Some(COUNTER_HEADER_BYTES));
-                    self.clear_heightfield(&mut encoder);
+                    if let Some(region) = region {
+                        self.clear_heightfield(&mut encoder, Some(region));
+                    }
                 }
-                Step::Texels(pipeline) => Self::dispatch(&mut encoder, pipeline, &bind, t),
+                Step::Texels(pipeline, map) => {
+                    if let (Some(t), Some(region)) = (p.texel_rect, region) {
+                        self.record_texels(&mut encoder, &bind, pipeline, map, t, region);
+                    }
+                }
                 Step::Select => {
                     if let Some(r) = p.pixel_rect {
                         self.record_select(&mut encoder, &bind, 0, r);
@@ -858,6 +1029,9 @@ impl Renderer {
         }
         if let (Some(t), Some(r)) = (p.texel_rect, p.pixel_rect) {
             log::info!("texel rect {}x{}, pixel rect {}x{}", t.w, t.h, r.w, r.h);
+        }
+        if p.texel_rect.is_some() {
+            self.dirty = p.texel_rect;
         }
         Ok(out)
     }
