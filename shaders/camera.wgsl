@@ -1,4 +1,5 @@
 //! use shared/common.wgsl
+//! use shared/shading.wgsl
 // Stage 3, camera: each pixel's lens ray meets the deformed skin inside the shell: uniform
 // steps bracket the first point where the ray leaves the gel, bisection refines it.
 // Writes the G-buffer the LED stage shades. Mirror: src/render/camera.rs.
@@ -220,7 +221,9 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
     atomicStore(&counters[TOUCHED_LIST + k], pixel);
 }
 
-// A contact frame, second pass: one invocation per touched pixel.
+// A contact frame, second pass: one invocation per touched pixel, cast and shaded at once
+// (the LED stage's shading, shaders/shared/shading.wgsl): the hit goes straight into the
+// pixel instead of through the G-buffer, whose loads and stores llvmpipe makes lane by lane.
 @compute @workgroup_size(64)
 fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = touched_index(id);
@@ -228,7 +231,12 @@ fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let pixel = atomicLoad(&counters[TOUCHED_LIST + k]);
-    camera_pixel(pixel % sensor.image_size.x, pixel / sensor.image_size.x, false);
+    let hit = cast_ray(vec2<f32>(f32(pixel % sensor.image_size.x), f32(pixel / sensor.image_size.x)));
+    if !hit.valid {
+        write_pixel(pixel, vec3<f32>(0.0), 0.0);
+        return;
+    }
+    write_pixel(pixel, shade(hit.point, hit.normal, hit.ray), hit.indentation);
 }
 
 // For tests: the undeformed surface point each listed pixel sees. Input:

@@ -13,16 +13,6 @@ fn sample_meridian(t: vec2<f32>) -> vec2<f32> {
     return sample_map(elastomer_map, t).xy;
 }
 
-// Weights of the narrow (x) and wide (y) Gaussians at surface offset x (tap k).
-fn blend_weights(k: i32, x: f32) -> vec2<f32> {
-    let sigma = sensor.blend_mm;
-    if sigma <= 0.0 {
-        return vec2<f32>(select(0.0, 1.0, k == 0));
-    }
-    let q = x / sigma;
-    return vec2<f32>(exp(-0.5 * q * q), exp(-0.125 * q * q));
-}
-
 @compute @workgroup_size(8, 8)
 fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
@@ -38,14 +28,11 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     let taps = i32(sensor.blend_taps);
     let step = sensor.reach_mm / f32(taps);
     var acc = vec2<f32>(0.0);
-    var norm = vec2<f32>(0.0);
     for (var k = -taps; k <= taps; k++) {
         let x = f32(k) * step;
-        let w = blend_weights(k, x);
-        acc += w * sample_penetration(texel_of(u + x * dir));
-        norm += w;
+        acc += sensor.blend_weights[abs(k)].xy * sample_penetration(texel_of(u + x * dir));
     }
-    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(acc / norm, 0.0, 0.0);
+    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(acc, 0.0, 0.0);
 }
 
 @compute @workgroup_size(8, 8)
@@ -63,19 +50,15 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
         let taps = i32(sensor.blend_taps);
         let step = sensor.reach_mm / f32(taps);
         var acc = vec2<f32>(0.0);
-        var norm = vec2<f32>(0.0);
         // Walk the parallel by rotating the disc position one tap at a time (one sine and
         // cosine per texel instead of per tap).
         let turn = vec2<f32>(cos(step / rho), sin(step / rho));
         var u = disc_of(vec2<f32>(c.x, c.y - f32(taps) * step / rho));
         for (var k = -taps; k <= taps; k++) {
-            let x = f32(k) * step;
-            let w = blend_weights(k, x);
-            acc += w * sample_meridian(texel_of(u));
-            norm += w;
+            acc += sensor.blend_weights[abs(k)].xy * sample_meridian(texel_of(u));
             u = vec2<f32>(u.x * turn.x - u.y * turn.y, u.x * turn.y + u.y * turn.x);
         }
-        v = acc / norm;
+        v = acc;
     }
     let t = sensor.shell_thickness;
     if penetration[idx] > t {

@@ -1,59 +1,18 @@
 //! use shared/common.wgsl
+//! use shared/shading.wgsl
 // Stage 4, LEDs: shade the G-buffer with three point lights at the finger's base (diffuse +
 // Blinn-Phong specular, fall-off, ambient), gamma-encode to RGBA8; optional seeded noise.
 // Mirror: src/render/leds.rs.
-
-// Relative emission towards unit direction `towards`: the LEDs shine up the finger (+z).
-fn emission(towards: vec3<f32>) -> f32 {
-    if sensor.spread == 0.0 {
-        return 1.0;
-    }
-    return pow(max(towards.z, 0.0), sensor.spread);
-}
-
-fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
-    // The paint faces the inside of the finger, where the camera and the LEDs are.
-    let facing = -normal;
-    let view = -ray;
-    var colour = vec3<f32>(sensor.ambient);
-    for (var i = 0; i < 3; i++) {
-        let to_led = sensor.led_position[i].xyz - p;
-        let dist = length(to_led);
-        let l = to_led / dist;
-        let lambert = dot(facing, l);
-        if lambert <= 0.0 {
-            continue;
-        }
-        let d = dist / sensor.falloff_mm;
-        let falloff = emission(-l) / (1.0 + d * d);
-        let half_vector = normalize(l + view);
-        let spec = pow(max(dot(facing, half_vector), 0.0), sensor.shininess);
-        colour += sensor.led_colour[i].xyz * (sensor.intensity * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
-    }
-    return colour;
-}
-
-fn encode(linear: f32) -> u32 {
-    let v = pow(clamp(linear, 0.0, 1.0), 1.0 / 2.2) * 255.0;
-    return u32(clamp(round(v), 0.0, 255.0));
-}
-
-fn pack_rgba(c: vec3<u32>) -> u32 {
-    return c.x | (c.y << 8u) | (c.z << 16u) | (255u << 24u);
-}
 
 // One pixel from its G-buffer row.
 fn leds_pixel(i: u32) {
     let g0 = gbuffer[GBUFFER_STRIDE * i];
     let g1 = gbuffer[GBUFFER_STRIDE * i + 1u];
     if g1.w == 0.0 {
-        image[i] = pack_rgba(vec3<u32>(0u));
-        indentation[i] = 0.0;
+        write_pixel(i, vec3<f32>(0.0), 0.0);
         return;
     }
-    let colour = shade(g0.xyz, gbuffer[GBUFFER_STRIDE * i + 2u].xyz, g1.xyz);
-    image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
-    indentation[i] = g0.w;
+    write_pixel(i, shade(g0.xyz, gbuffer[GBUFFER_STRIDE * i + 2u].xyz, g1.xyz), g0.w);
 }
 
 // The reference frame: every pixel of the pixel rect (the whole image).
@@ -63,17 +22,6 @@ fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     leds_pixel((frame.pixel_rect.y + id.y) * sensor.image_size.x + frame.pixel_rect.x + id.x);
-}
-
-// A contact frame: the pixels on the touched list (camera.wgsl select_touched); every other
-// pixel keeps the reference's colour, copied before.
-@compute @workgroup_size(64)
-fn leds_touched(@builtin(global_invocation_id) id: vec3<u32>) {
-    let k = touched_index(id);
-    if k >= atomicLoad(&counters[TOUCHED_COUNT]) {
-        return;
-    }
-    leds_pixel(atomicLoad(&counters[TOUCHED_LIST + k]));
 }
 
 fn pcg_hash(input: u32) -> u32 {

@@ -48,6 +48,8 @@ struct Sensor {
     _pad2: u32,
     led_position: array<vec4<f32>, 3>,
     led_colour: array<vec4<f32>, 3>,
+    // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
+    blend_weights: array<vec4<f32>, 65>,
 }
 
 // Per frame (one contact): src/render/uniforms.rs FrameUniform.

@@ -44,6 +44,10 @@ pub const SHARED: &[(&str, &str)] = &[
         "shared/object.wgsl",
         include_str!("../../shaders/shared/object.wgsl"),
     ),
+    (
+        "shared/shading.wgsl",
+        include_str!("../../shaders/shared/shading.wgsl"),
+    ),
 ];
 
 /// The `shaders/` directory of the source tree (for tests and development tools; the library

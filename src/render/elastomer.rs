@@ -61,6 +61,27 @@ fn sample_channels(field: &[DVec2], texels: u32, t: DVec2) -> DVec2 {
         .sum()
 }
 
+/// The kernels' weights for taps k = 0..=taps (tap -k weighs as tap k), normalised so that
+/// the taps -taps..=taps sum to one: x the narrow Gaussian (sigma `blend_mm`), y the wide one
+/// (twice as wide). They depend on the tap alone, so the GPU reads them from a table
+/// (`SensorUniform::blend_weights`) instead of evaluating two exponentials per tap.
+pub fn blend_weights(config: &ElastomerConfig, reach: f64, taps: i32) -> Vec<DVec2> {
+    let step = reach / taps as f64;
+    let sigma = config.blend_mm;
+    let raw: Vec<DVec2> = (0..=taps)
+        .map(|k| {
+            if sigma > 0.0 {
+                let q = k as f64 * step / sigma;
+                DVec2::new((-0.5 * q * q).exp(), (-0.125 * q * q).exp())
+            } else {
+                DVec2::splat((k == 0) as i32 as f64)
+            }
+        })
+        .collect();
+    let norm = raw.iter().skip(1).sum::<DVec2>() * 2.0 + raw[0];
+    raw.into_iter().map(|w| w / norm).collect()
+}
+
 /// One separable pass: for samples `sample(x)` at surface offsets x = k * step, the narrow
 /// Gaussian of their x channel and the wide Gaussian of their y channel.
 fn pass(
@@ -70,23 +91,10 @@ fn pass(
     mut sample: impl FnMut(f64) -> DVec2,
 ) -> DVec2 {
     let step = reach / taps as f64;
-    let sigma = config.blend_mm;
-    let (mut acc, mut norm) = (DVec2::ZERO, DVec2::ZERO);
-    for k in -taps..=taps {
-        let x = k as f64 * step;
-        let v = sample(x);
-        let w = if sigma > 0.0 {
-            DVec2::new(
-                (-0.5 * (x / sigma).powi(2)).exp(),
-                (-0.125 * (x / sigma).powi(2)).exp(),
-            )
-        } else {
-            DVec2::splat((k == 0) as i32 as f64)
-        };
-        acc += w * v;
-        norm += w;
-    }
-    acc / norm
+    let weights = blend_weights(config, reach, taps);
+    (-taps..=taps)
+        .map(|k| weights[k.unsigned_abs() as usize] * sample(k as f64 * step))
+        .sum()
 }
 
 /// Pass 1, along meridians, where disc distance is surface distance: from the penetration,

@@ -2,7 +2,7 @@
 //! (bindings in `shaders/shared/common.wgsl`). The empty finger is rendered once; each
 //! contact copies it and re-renders only the pixels that can see the contact's footprint:
 //! of the footprint's pixel rectangle, a first pass lists the pixels whose rays the
-//! deformation reaches, and the camera and LED passes run over that list alone, sized on the
+//! deformation reaches, and one pass casts and shades that list alone, sized on the
 //! GPU (indirect dispatch).
 //! Frames of a batch are recorded into one submission, each into its own slice of the
 //! output buffers, and read back together.
@@ -39,7 +39,6 @@ struct Pipelines {
     select_touched: wgpu::ComputePipeline,
     camera_touched: wgpu::ComputePipeline,
     leds: wgpu::ComputePipeline,
-    leds_touched: wgpu::ComputePipeline,
     add_noise: wgpu::ComputePipeline,
     unproject_pixels: wgpu::ComputePipeline,
 }
@@ -296,7 +295,6 @@ impl Renderer {
             select_touched: p("camera", "select_touched")?,
             camera_touched: p("camera", "camera_touched")?,
             leds: p("leds", "leds")?,
-            leds_touched: p("leds", "leds_touched")?,
             add_noise: p("leds", "add_noise")?,
             unproject_pixels: p("camera", "unproject_pixels")?,
         };
@@ -514,7 +512,6 @@ impl Renderer {
         self.record_select(encoder, bind, slot, rect);
         let args = slot * DISPATCH_ARGS_BYTES;
         self.dispatch_indirect(encoder, &self.pipelines.camera_touched, bind, args);
-        self.dispatch_indirect(encoder, &self.pipelines.leds_touched, bind, args);
     }
 
     /// The touched list of `rect` and the copy of its dispatch size to `dispatch_args`.
@@ -844,15 +841,16 @@ impl Renderer {
             .collect();
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
-            let offset = slot as u64 * self.slot_bytes;
+            let (start, count) = self.changed_rows(p.pixel_rect);
+            let offset = slot as u64 * self.slot_bytes + start * 4;
             encoder.copy_buffer_to_buffer(
                 &self.reference_image,
-                0,
+                start * 4,
                 &self.image,
                 offset,
-                Some(self.slot_bytes),
+                Some(count * 4),
             );
-            encoder.clear_buffer(&self.indentation, offset, Some(self.slot_bytes));
+            encoder.clear_buffer(&self.indentation, offset, Some(count * 4));
             // The list itself needs no clearing: only its first TOUCHED_COUNT words are read.
             encoder.clear_buffer(
                 &self.counters,
@@ -882,7 +880,7 @@ impl Renderer {
         timings.render += rendered - start;
         let rows: Vec<(u64, u64)> = prepared
             .iter()
-            .map(|p| self.indentation_rows(p.pixel_rect))
+            .map(|p| self.changed_rows(p.pixel_rect))
             .collect();
         let mut parts = self.read_frames(&rows)?.into_iter();
         let mut frames = Vec::with_capacity(prepared.len());
@@ -912,21 +910,25 @@ impl Renderer {
         Ok(frames)
     }
 
-    /// The rows of a frame's indentation that can be non-zero (the re-rendered ones), as
-    /// (first pixel, pixels).
-    fn indentation_rows(&self, pixel_rect: Option<Rect>) -> (u64, u64) {
+    /// The pixels a contact frame can change, as (first pixel, pixels): the rows of its
+    /// pixel rect, or every pixel when the sensor adds noise. The rest of the frame is the
+    /// reference's, which the CPU keeps, so only these rows are copied, cleared and read.
+    fn changed_rows(&self, pixel_rect: Option<Rect>) -> (u64, u64) {
         let w = self.sensor.width;
+        if self.sensor.config.render.noise > 0.0 {
+            return (0, w as u64 * self.sensor.height as u64);
+        }
         pixel_rect.map_or((0, 0), |r| ((r.y * w) as u64, (r.h * w) as u64))
     }
 
-    /// One round trip for frames `0..rows.len()` of a batch: per frame, its image, its
-    /// indentation (read over `rows`, zero elsewhere), and its counters, in that order.
+    /// One round trip for frames `0..rows.len()` of a batch: per frame, its image and its
+    /// indentation (read over `rows`; the reference's image and zero elsewhere), and its
+    /// counters, in that order.
     fn read_frames(&self, rows: &[(u64, u64)]) -> Result<Vec<Part>> {
-        let frame_bytes = self.sensor.width as u64 * self.sensor.height as u64 * 4;
         let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> = Vec::with_capacity(3 * rows.len());
         for (k, &(start, count)) in rows.iter().enumerate() {
             let slot = k as u64 * self.slot_bytes;
-            ranges.push((&self.image, slot, frame_bytes));
+            ranges.push((&self.image, slot + start * 4, count * 4));
             ranges.push((&self.indentation, slot + start * 4, count * 4));
             ranges.push((
                 &self.counters,
@@ -934,13 +936,17 @@ impl Renderer {
                 COUNTER_HEADER_BYTES,
             ));
         }
-        let pixels = frame_bytes as usize / 4;
+        let pixels = self.sensor.width as usize * self.sensor.height as usize;
         read_ranges_with(self.ctx, Some(&self.staging), &ranges, |k, bytes| {
+            let start = rows[k / 3].0 as usize;
             match k % 3 {
-                0 => Part::Rgba(bytes.to_vec()),
+                0 => {
+                    let mut rgba = self.reference.rgba.clone();
+                    rgba[start * 4..start * 4 + bytes.len()].copy_from_slice(bytes);
+                    Part::Rgba(rgba)
+                }
                 1 => {
                     let mut indentation = vec![0.0f32; pixels];
-                    let start = rows[k / 3].0 as usize;
                     let read = &mut indentation[start..start + bytes.len() / 4];
                     bytemuck::cast_slice_mut::<f32, u8>(read).copy_from_slice(bytes);
                     Part::Indentation(indentation)
@@ -975,12 +981,8 @@ impl Renderer {
         stages.extend([
             ("camera: select touched", Step::Select),
             (
-                "camera: touched pixels",
+                "camera + leds: touched pixels",
                 Step::Touched(&pipelines.camera_touched),
-            ),
-            (
-                "leds: touched pixels",
-                Step::Touched(&pipelines.leds_touched),
             ),
             ("readback", Step::Readback),
         ]);
@@ -990,19 +992,20 @@ impl Renderer {
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             match step {
                 Step::Readback => {
-                    self.read_frames(&[self.indentation_rows(p.pixel_rect)])?;
+                    self.read_frames(&[self.changed_rows(p.pixel_rect)])?;
                     out.push((name, start.elapsed()));
                     continue;
                 }
                 Step::Clear => {
+                    let (start, count) = self.changed_rows(p.pixel_rect);
                     encoder.copy_buffer_to_buffer(
                         &self.reference_image,
-                        0,
+                        start * 4,
                         &self.image,
-                        0,
-                        Some(self.slot_bytes),
+                        start * 4,
+                        Some(count * 4),
                     );
-                    encoder.clear_buffer(&self.indentation, 0, Some(self.slot_bytes));
+                    encoder.clear_buffer(&self.indentation, start * 4, Some(count * 4));
                     encoder.clear_buffer(&self.counters, 0, Some(COUNTER_HEADER_BYTES));
                     if let Some(region) = region {
                         self.clear_heightfield(&mut encoder, Some(region));

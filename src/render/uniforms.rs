@@ -41,9 +41,15 @@ pub struct SensorUniform {
     pub _pad: [u32; 3],
     pub led_position: [[f32; 4]; 3],
     pub led_colour: [[f32; 4]; 3],
+    /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
+    /// [`super::elastomer::blend_weights`].
+    pub blend_weights: [[f32; 4]; BLEND_WEIGHTS],
 }
 
-const _: () = assert!(std::mem::size_of::<SensorUniform>() == 240);
+/// Entries of the weight table: taps 0..=MAX_BLEND_TAPS.
+pub const BLEND_WEIGHTS: usize = super::elastomer::MAX_BLEND_TAPS as usize + 1;
+
+const _: () = assert!(std::mem::size_of::<SensorUniform>() == 240 + 16 * BLEND_WEIGHTS);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -79,6 +85,14 @@ impl SensorUniform {
         let lights = leds::leds(sensor);
         let f = &sensor.finger;
         let reach = super::elastomer::blend_reach_mm(&c.elastomer);
+        let taps = super::elastomer::blend_taps(reach, grid);
+        let mut blend_weights = [[0.0f32; 4]; BLEND_WEIGHTS];
+        for (slot, w) in blend_weights
+            .iter_mut()
+            .zip(super::elastomer::blend_weights(&c.elastomer, reach, taps))
+        {
+            *slot = [w.x as f32, w.y as f32, 0.0, 0.0];
+        }
         SensorUniform {
             radius: f.radius as f32,
             cylinder_length: f.cylinder_length as f32,
@@ -112,7 +126,7 @@ impl SensorUniform {
             spread: c.leds.spread as f32,
             drape_mm: c.elastomer.drape_mm as f32,
             reach_mm: reach as f32,
-            blend_taps: super::elastomer::blend_taps(reach, grid) as u32,
+            blend_taps: taps as u32,
             _pad: [0; 3],
             led_position: lights.map(|l| {
                 [
@@ -124,6 +138,7 @@ impl SensorUniform {
             }),
             led_colour: lights
                 .map(|l| [l.colour.x as f32, l.colour.y as f32, l.colour.z as f32, 0.0]),
+            blend_weights,
         }
     }
 }

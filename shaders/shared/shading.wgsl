@@ -1,0 +1,51 @@
+//! use shared/common.wgsl
+// The LEDs' light on the painted skin and the pixel it makes: shared by the LED stage (the
+// reference frame, from the G-buffer) and the camera stage's pass over a contact's touched
+// pixels (straight from the ray's hit: no round trip through the G-buffer). Mirror:
+// src/render/leds.rs.
+
+// Relative emission towards unit direction `towards`: the LEDs shine up the finger (+z).
+fn emission(towards: vec3<f32>) -> f32 {
+    if sensor.spread == 0.0 {
+        return 1.0;
+    }
+    return pow(max(towards.z, 0.0), sensor.spread);
+}
+
+fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
+    // The paint faces the inside of the finger, where the camera and the LEDs are.
+    let facing = -normal;
+    let view = -ray;
+    var colour = vec3<f32>(sensor.ambient);
+    for (var i = 0; i < 3; i++) {
+        let to_led = sensor.led_position[i].xyz - p;
+        let dist = length(to_led);
+        let l = to_led / dist;
+        let lambert = dot(facing, l);
+        if lambert <= 0.0 {
+            continue;
+        }
+        let d = dist / sensor.falloff_mm;
+        let falloff = emission(-l) / (1.0 + d * d);
+        let half_vector = normalize(l + view);
+        let spec = pow(max(dot(facing, half_vector), 0.0), sensor.shininess);
+        colour += sensor.led_colour[i].xyz * (sensor.intensity * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
+    }
+    return colour;
+}
+
+fn encode(linear: f32) -> u32 {
+    let v = pow(clamp(linear, 0.0, 1.0), 1.0 / 2.2) * 255.0;
+    return u32(clamp(round(v), 0.0, 255.0));
+}
+
+fn pack_rgba(c: vec3<u32>) -> u32 {
+    return c.x | (c.y << 8u) | (c.z << 16u) | (255u << 24u);
+}
+
+// Pixel i's colour from the linear light `colour` (black beyond the lens) and the
+// indentation it sees.
+fn write_pixel(i: u32, colour: vec3<f32>, depth: f32) {
+    image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
+    indentation[i] = depth;
+}
