@@ -2,7 +2,7 @@
 //! use shared/shading.wgsl
 // Stage 3, camera: each pixel's lens ray meets the deformed skin inside the shell: uniform
 // steps bracket the first point where the ray leaves the gel, bisection refines it.
-// Writes the G-buffer the LED stage shades. Mirror: src/render/camera.rs.
+// Each landing ray is shaded at once (shared/shading.wgsl). Mirror: src/render/camera.rs.
 
 const BISECTION_STEPS: u32 = 6u;
 
@@ -164,33 +164,29 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
     return hit;
 }
 
-// One pixel: its skin hit into the G-buffer; the reference frame also leaves the ray's probe
-// positions for later frames' `select_touched`.
-fn camera_pixel(x: u32, y: u32, reference: bool) {
-    let base = GBUFFER_STRIDE * (y * sensor.image_size.x + x);
-    let hit = cast_ray(vec2<f32>(f32(x), f32(y)));
-    gbuffer[base] = vec4<f32>(hit.point, hit.indentation);
-    // w: 0 = no ray, 1 = shade.
-    gbuffer[base + 1u] = vec4<f32>(hit.ray, select(0.0, 1.0, hit.valid));
-    gbuffer[base + 2u] = vec4<f32>(hit.normal, 0.0);
-    if reference {
-        if hit.valid {
-            let p = ray_probes(hit.ray);
-            gbuffer[base + 3u] = vec4<f32>(p.a, p.b);
-            gbuffer[base + 4u] = vec4<f32>(p.c, 1.0, 0.0);
-        } else {
-            gbuffer[base + 4u] = vec4<f32>(0.0);
-        }
-    }
-}
-
-// The reference frame: every pixel of the pixel rect (the whole image).
+// The reference frame, every pixel of the pixel rect (the whole image): the empty finger,
+// whose skin is the undeformed surface itself (the heightfield is zero), shaded; and the
+// ray's probe positions, kept for later frames' `select_touched`.
 @compute @workgroup_size(8, 8)
 fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
         return;
     }
-    camera_pixel(frame.pixel_rect.x + id.x, frame.pixel_rect.y + id.y, true);
+    let x = frame.pixel_rect.x + id.x;
+    let y = frame.pixel_rect.y + id.y;
+    let i = y * sensor.image_size.x + x;
+    let ray = pixel_ray(vec2<f32>(f32(x), f32(y)));
+    if ray.w == 0.0 {
+        write_pixel(i, vec3<f32>(0.0), 0.0);
+        probes[PROBES_STRIDE * i + 1u] = vec4<f32>(0.0);
+        return;
+    }
+    let dir = ray.xyz;
+    let point = capsule_hit(dir, 0.0) * dir;
+    write_pixel(i, shade(point, surface_normal(coord_of(point)), dir), 0.0);
+    let p = ray_probes(dir);
+    probes[PROBES_STRIDE * i] = vec4<f32>(p.a, p.b);
+    probes[PROBES_STRIDE * i + 1u] = vec4<f32>(p.c, 1.0, 0.0);
 }
 
 // A contact frame, first pass over its pixel rect: the pixels whose ray's stretch of shell
@@ -204,8 +200,8 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let pixel = (frame.pixel_rect.y + id.y) * sensor.image_size.x + frame.pixel_rect.x + id.x;
-    let p0 = gbuffer[GBUFFER_STRIDE * pixel + 3u];
-    let p1 = gbuffer[GBUFFER_STRIDE * pixel + 4u];
+    let p0 = probes[PROBES_STRIDE * pixel];
+    let p1 = probes[PROBES_STRIDE * pixel + 1u];
     if p1.z == 0.0 || probes_depth(Probes(p0.xy, p0.zw, p1.xy)) == 0.0 {
         return;
     }
@@ -223,7 +219,7 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // A contact frame, second pass: one invocation per touched pixel, cast and shaded at once
 // (the LED stage's shading, shaders/shared/shading.wgsl): the hit goes straight into the
-// pixel instead of through the G-buffer, whose loads and stores llvmpipe makes lane by lane.
+// pixel.
 @compute @workgroup_size(64)
 fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = touched_index(id);
@@ -241,7 +237,7 @@ fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // For tests: the undeformed surface point each listed pixel sees. Input:
 // elastomer_scratch[i].xy is a pixel, for i < frame.pixel_rect.z; output: (point, 1), or 0
-// beyond the lens. (Not the G-buffer: it keeps the reference frame's probe positions.)
+// beyond the lens. (Not the probes buffer: it keeps the reference frame's probe positions.)
 @compute @workgroup_size(64)
 fn unproject_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= frame.pixel_rect.z {

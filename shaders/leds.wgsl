@@ -1,28 +1,9 @@
 //! use shared/common.wgsl
 //! use shared/shading.wgsl
-// Stage 4, LEDs: shade the G-buffer with three point lights at the finger's base (diffuse +
-// Blinn-Phong specular, fall-off, ambient), gamma-encode to RGBA8; optional seeded noise.
-// Mirror: src/render/leds.rs.
-
-// One pixel from its G-buffer row.
-fn leds_pixel(i: u32) {
-    let g0 = gbuffer[GBUFFER_STRIDE * i];
-    let g1 = gbuffer[GBUFFER_STRIDE * i + 1u];
-    if g1.w == 0.0 {
-        write_pixel(i, vec3<f32>(0.0), 0.0);
-        return;
-    }
-    write_pixel(i, shade(g0.xyz, gbuffer[GBUFFER_STRIDE * i + 2u].xyz, g1.xyz), g0.w);
-}
-
-// The reference frame: every pixel of the pixel rect (the whole image).
-@compute @workgroup_size(8, 8)
-fn leds(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
-        return;
-    }
-    leds_pixel((frame.pixel_rect.y + id.y) * sensor.image_size.x + frame.pixel_rect.x + id.x);
-}
+// Stage 4, LEDs: three point lights at the finger's base light the painted skin (the light
+// model, shared/shading.wgsl, is applied by the camera's passes as each ray lands, so no
+// G-buffer travels between the stages); here, the sensor's seeded noise on the finished
+// frame. Mirror: src/render/leds.rs.
 
 fn pcg_hash(input: u32) -> u32 {
     let state = input * 747796405u + 2891336453u;
@@ -52,8 +33,8 @@ fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = id.y * sensor.image_size.x + id.x;
-    // The reference frame marked the pixels the lens sees (camera.wgsl camera_pixel).
-    if gbuffer[GBUFFER_STRIDE * i + 4u].z == 0.0 {
+    // The reference frame marked the pixels the lens sees (camera.wgsl camera).
+    if probes[PROBES_STRIDE * i + 1u].z == 0.0 {
         return;
     }
     let v = image[i];

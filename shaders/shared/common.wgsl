@@ -90,14 +90,13 @@ const REFERENCE_FRAME: u32 = 101u;
 @group(0) @binding(3) var<storage, read_write> elastomer_scratch: array<vec4<f32>>;
 // Stage 2 output: the skin's inward displacement, per texel.
 @group(0) @binding(4) var<storage, read_write> height: array<f32>;
-// Stage 3 output, GBUFFER_STRIDE vec4 per pixel: (skin point, indentation), (ray direction,
-// flag: 0 no ray, 1 shade), (skin normal, -), and, written once by the reference frame, the
-// disc positions of the ray's three probes (then 1, 0: the last vec4's z marks the pixels
-// the lens sees).
-@group(0) @binding(5) var<storage, read_write> gbuffer: array<vec4<f32>>;
-// Mirror: src/render/gpu.rs GBUFFER_BYTES_PER_PIXEL.
-const GBUFFER_STRIDE: u32 = 5u;
-// Stage 4 output: packed RGBA8 per pixel.
+// Written once by the reference frame, PROBES_STRIDE vec4 per pixel: the disc positions of
+// the three probes of the pixel's ray (a.xy, b.xy), (c.xy, 1, 0); the second vec4's z marks
+// the pixels the lens sees (0 beyond it).
+@group(0) @binding(5) var<storage, read_write> probes: array<vec4<f32>>;
+// Mirror: src/render/gpu.rs PROBES_BYTES_PER_PIXEL.
+const PROBES_STRIDE: u32 = 2u;
+// The image: packed RGBA8 per pixel.
 @group(0) @binding(6) var<storage, read_write> image: array<u32>;
 // Indentation (mm) each pixel sees.
 @group(0) @binding(7) var<storage, read_write> indentation: array<f32>;

@@ -1,7 +1,7 @@
 //! use shared/common.wgsl
-// The LEDs' light on the painted skin and the pixel it makes: shared by the LED stage (the
-// reference frame, from the G-buffer) and the camera stage's pass over a contact's touched
-// pixels (straight from the ray's hit: no round trip through the G-buffer). Mirror:
+// The LEDs' light on the painted skin and the pixel it makes, applied by the camera stage's
+// passes where each ray lands (the reference frame's and a contact's touched pixels): no
+// G-buffer round trip, whose loads and stores llvmpipe makes lane by lane. Mirror:
 // src/render/leds.rs.
 
 // Relative emission towards unit direction `towards`: the LEDs shine up the finger (+z).

@@ -38,7 +38,6 @@ struct Pipelines {
     camera: wgpu::ComputePipeline,
     select_touched: wgpu::ComputePipeline,
     camera_touched: wgpu::ComputePipeline,
-    leds: wgpu::ComputePipeline,
     add_noise: wgpu::ComputePipeline,
     unproject_pixels: wgpu::ComputePipeline,
 }
@@ -88,7 +87,8 @@ pub struct Renderer {
     maps: [HeightfieldMap; 3],
     /// Texels the maps may hold non-zero (the last contact's texel rect).
     dirty: Option<Rect>,
-    gbuffer: wgpu::Buffer,
+    /// Per pixel, where its ray crosses the shell (written by the reference frame).
+    probes: wgpu::Buffer,
     image: wgpu::Buffer,
     indentation: wgpu::Buffer,
     counters: wgpu::Buffer,
@@ -163,8 +163,8 @@ const COUNTER_HEADER_BYTES: u64 = TOUCHED_LIST * 4;
 /// Bytes of one frame's indirect dispatch arguments (three words, 16-byte stride).
 const DISPATCH_ARGS_BYTES: u64 = 16;
 
-/// Five vec4 per pixel (shaders/shared/common.wgsl `GBUFFER_STRIDE`).
-const GBUFFER_BYTES_PER_PIXEL: u64 = 5 * 16;
+/// Two vec4 per pixel (shaders/shared/common.wgsl `PROBES_STRIDE`).
+const PROBES_BYTES_PER_PIXEL: u64 = 2 * 16;
 
 fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -231,7 +231,7 @@ impl Renderer {
         let allowed = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        let image_bytes = (pixels * GBUFFER_BYTES_PER_PIXEL).max(slot_bytes * MAX_BATCH as u64);
+        let image_bytes = (pixels * PROBES_BYTES_PER_PIXEL).max(slot_bytes * MAX_BATCH as u64);
         if image_bytes > allowed {
             return Err(GeltipError::input(
                 "image",
@@ -294,7 +294,6 @@ impl Renderer {
             camera: p("camera", "camera")?,
             select_touched: p("camera", "select_touched")?,
             camera_touched: p("camera", "camera_touched")?,
-            leds: p("leds", "leds")?,
             add_noise: p("leds", "add_noise")?,
             unproject_pixels: p("camera", "unproject_pixels")?,
         };
@@ -324,10 +323,10 @@ impl Renderer {
             ]
             .map(|(label, format)| heightfield_map(ctx, label, grid.texels, format)),
             dirty: None,
-            gbuffer: storage(
+            probes: storage(
                 ctx,
-                "geltip gbuffer",
-                pixels * GBUFFER_BYTES_PER_PIXEL,
+                "geltip ray probes",
+                pixels * PROBES_BYTES_PER_PIXEL,
                 none,
             ),
             image: storage(ctx, "geltip image", slot_bytes * MAX_BATCH as u64, none),
@@ -425,7 +424,7 @@ impl Renderer {
             whole(&self.penetration),
             whole(&self.elastomer_scratch),
             whole(&self.height),
-            whole(&self.gbuffer),
+            whole(&self.probes),
             slice(&self.image, slot * self.slot_bytes, self.slot_bytes),
             slice(&self.indentation, slot * self.slot_bytes, self.slot_bytes),
             whole(grid),
@@ -653,12 +652,6 @@ impl Renderer {
         Self::dispatch(
             &mut encoder,
             &self.pipelines.camera,
-            &bind,
-            (groups(w, WORKGROUP), groups(h, WORKGROUP)),
-        );
-        Self::dispatch(
-            &mut encoder,
-            &self.pipelines.leds,
             &bind,
             (groups(w, WORKGROUP), groups(h, WORKGROUP)),
         );
