@@ -199,9 +199,11 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
         return;
     }
-    let pixel = (frame.pixel_rect.y + id.y) * sensor.image_size.x + frame.pixel_rect.x + id.x;
-    let p0 = probes[PROBES_STRIDE * pixel];
-    let p1 = probes[PROBES_STRIDE * pixel + 1u];
+    let x = frame.pixel_rect.x + id.x;
+    let y = frame.pixel_rect.y + id.y;
+    let pixel = y * sensor.image_size.x + x;
+    let p0 = textureLoad(probe_map, vec2<u32>(2u * x, y), 0);
+    let p1 = textureLoad(probe_map, vec2<u32>(2u * x + 1u, y), 0);
     if p1.z == 0.0 || probes_depth(Probes(p0.xy, p0.zw, p1.xy)) == 0.0 {
         return;
     }

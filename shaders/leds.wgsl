@@ -34,7 +34,7 @@ fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = id.y * sensor.image_size.x + id.x;
     // The reference frame marked the pixels the lens sees (camera.wgsl camera).
-    if probes[PROBES_STRIDE * i + 1u].z == 0.0 {
+    if textureLoad(probe_map, vec2<u32>(2u * id.x + 1u, id.y), 0).z == 0.0 {
         return;
     }
     let v = image[i];

@@ -112,6 +112,8 @@ const PROBES_STRIDE: u32 = 2u;
 @group(0) @binding(10) var penetration_map: texture_2d<f32>;
 @group(0) @binding(11) var elastomer_map: texture_2d<f32>;
 @group(0) @binding(12) var height_map: texture_2d<f32>;
+// The same for the rays' probes: pixel (x, y)'s two vec4 are texels (2x, y) and (2x + 1, y).
+@group(0) @binding(13) var probe_map: texture_2d<f32>;
 
 // Texels pressed beyond the shell.
 const OVER_PRESSED: u32 = 0u;

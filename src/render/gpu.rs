@@ -84,11 +84,13 @@ pub struct Renderer {
     height: wgpu::Buffer,
     /// The heightfield as the samplers read it: textures refreshed from the three buffers
     /// above after each stage that writes them (see `shaders/shared/common.wgsl`).
-    maps: [HeightfieldMap; 3],
+    maps: [MapTexture; 3],
     /// Texels the maps may hold non-zero (the last contact's texel rect).
     dirty: Option<Rect>,
     /// Per pixel, where its ray crosses the shell (written by the reference frame).
     probes: wgpu::Buffer,
+    /// `probes` as the passes read it: pixel (x, y)'s two vec4 are texels (2x, y), (2x+1, y).
+    probe_map: MapTexture,
     image: wgpu::Buffer,
     indentation: wgpu::Buffer,
     counters: wgpu::Buffer,
@@ -110,8 +112,9 @@ pub struct Renderer {
     timings: Timings,
 }
 
-/// One texture copy of a heightfield buffer and the bytes per texel of both.
-struct HeightfieldMap {
+/// A texture copy of a buffer the shaders sample (see `shaders/shared/common.wgsl` for why)
+/// and the bytes per texel of both.
+struct MapTexture {
     texture: wgpu::Texture,
     view: wgpu::TextureView,
     texel_bytes: u32,
@@ -125,17 +128,17 @@ enum Map {
     Height = 2,
 }
 
-fn heightfield_map(
+fn map_texture(
     ctx: &GpuContext,
     label: &str,
-    texels: u32,
+    (width, height): (u32, u32),
     format: wgpu::TextureFormat,
-) -> HeightfieldMap {
+) -> MapTexture {
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
-            width: texels,
-            height: texels,
+            width,
+            height,
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
@@ -146,7 +149,7 @@ fn heightfield_map(
         view_formats: &[],
     });
     let view = texture.create_view(&Default::default());
-    HeightfieldMap {
+    MapTexture {
         texture,
         view,
         texel_bytes: format.block_copy_size(None).unwrap_or(4),
@@ -241,6 +244,28 @@ impl Renderer {
                 ),
             ));
         }
+        let side = limits.max_texture_dimension_2d;
+        if 2 * sensor.width > side || sensor.height > side {
+            return Err(GeltipError::input(
+                "image",
+                format!(
+                    "{}x{} needs a {}x{} texture; this device allows {side} per side",
+                    sensor.width,
+                    sensor.height,
+                    2 * sensor.width,
+                    sensor.height
+                ),
+            ));
+        }
+        if grid.texels > side {
+            return Err(GeltipError::config(
+                "render.heightfield_texels",
+                format!(
+                    "{} exceeds this device's {side} texels per texture side",
+                    grid.texels
+                ),
+            ));
+        }
         if texels * 16 > allowed {
             return Err(GeltipError::config(
                 "render.heightfield_texels",
@@ -266,6 +291,7 @@ impl Renderer {
             map_entry(10),
             map_entry(11),
             map_entry(12),
+            map_entry(13),
         ];
         let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
             let layout = ctx
@@ -321,7 +347,13 @@ impl Renderer {
                 ("geltip elastomer map", wgpu::TextureFormat::Rgba32Float),
                 ("geltip height map", wgpu::TextureFormat::R32Float),
             ]
-            .map(|(label, format)| heightfield_map(ctx, label, grid.texels, format)),
+            .map(|(label, format)| map_texture(ctx, label, (grid.texels, grid.texels), format)),
+            probe_map: map_texture(
+                ctx,
+                "geltip ray probes map",
+                (2 * sensor.width, sensor.height),
+                wgpu::TextureFormat::Rgba32Float,
+            ),
             dirty: None,
             probes: storage(
                 ctx,
@@ -436,6 +468,7 @@ impl Renderer {
             map(Map::Penetration),
             map(Map::Elastomer),
             map(Map::Height),
+            wgpu::BindingResource::TextureView(&self.probe_map.view),
         ];
         let entries: Vec<wgpu::BindGroupEntry> = resources
             .into_iter()
@@ -594,6 +627,41 @@ impl Renderer {
         );
     }
 
+    /// Copies the rays' probe positions into `probe_map`: in one copy when a row of them
+    /// is a whole number of 256-byte copy rows, else row by row (once per renderer).
+    fn copy_probes_to_map(&self, encoder: &mut wgpu::CommandEncoder) {
+        let (w, h) = (self.sensor.width, self.sensor.height);
+        let row_bytes = w * PROBES_BYTES_PER_PIXEL as u32;
+        let (rows_per_copy, copies) = if row_bytes % wgpu::COPY_BYTES_PER_ROW_ALIGNMENT == 0 {
+            (h, 1)
+        } else {
+            (1, h)
+        };
+        for k in 0..copies {
+            encoder.copy_buffer_to_texture(
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.probes,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: k as u64 * row_bytes as u64,
+                        bytes_per_row: Some(row_bytes).filter(|_| rows_per_copy > 1),
+                        rows_per_image: None,
+                    },
+                },
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.probe_map.texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d { x: 0, y: k, z: 0 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::Extent3d {
+                    width: 2 * w,
+                    height: rows_per_copy,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+    }
+
     /// A contact's heightfield stages over its texel rect `t`: the penetration, the
     /// elastomer's two passes and the skin's normals, each followed by the copy of what it
     /// wrote into its map. `region` covers `t` and whatever the maps still hold from the last
@@ -655,6 +723,7 @@ impl Renderer {
             &bind,
             (groups(w, WORKGROUP), groups(h, WORKGROUP)),
         );
+        self.copy_probes_to_map(&mut encoder);
         encoder.copy_buffer_to_buffer(
             &self.image,
             0,
