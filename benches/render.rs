@@ -5,13 +5,14 @@
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
 //! into CPU preparation, GPU render (submit + wait) and readback (copy, map, unpack), with the
-//! pixels re-rendered per frame. Each row is the median of `--repeat N` passes (default 5;
+//! pixels re-rendered per frame; and the CPU alternative (the CPU mirrors over the same
+//! footprint, on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps.
 
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::Solid;
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
-use geltip::render::Contact;
+use geltip::render::{cpu, Contact};
 use geltip::sensor::Sensor;
 use std::time::{Duration, Instant};
 
@@ -114,15 +115,13 @@ fn main() -> anyhow::Result<()> {
     let sensor = Sensor::load(&sensor_arg)?;
     let start = Instant::now();
     let mut r = Renderer::new(&sensor)?;
-    let info = r.adapter().clone();
     println!(
-        "geltip render benchmark: sensor {}, {}x{}, heightfield {}, adapter {} ({:?}), start-up {:.2} s; median of {repeat} passes",
+        "geltip render benchmark on {}: sensor {}, {}x{}, heightfield {}, start-up {:.2} s; median of {repeat} passes",
+        geltip::gpu::host_description(r.adapter()),
         sensor.name,
         sensor.width,
         sensor.height,
         sensor.config.render.heightfield_texels,
-        info.name,
-        info.backend,
         start.elapsed().as_secs_f64()
     );
     println!(
@@ -175,6 +174,27 @@ fn main() -> anyhow::Result<()> {
         Ok(t)
     })?;
     row(&format!("batches of {MAX_BATCH} contacts"), &mut batched);
+
+    // What a user could run instead on the same cores: the CPU mirrors over the same
+    // footprint (the GPU's reference frame as the empty finger), rayon over the touched
+    // pixels. Fewer frames: it is the slow row. Its split is not measured (all "render").
+    let cpu_list = &list[..(frames / 4).max(8).min(list.len())];
+    let reference_frame = r.reference().clone();
+    let (sensor, grid) = (r.sensor().clone(), *r.grid());
+    let mut cpu_passes = passes(repeat, cpu_list.len(), || {
+        let start = Instant::now();
+        for c in cpu_list {
+            cpu::render_contact(&sensor, &grid, &reference_frame, c)?;
+        }
+        Ok(Timings {
+            render: start.elapsed(),
+            ..Timings::default()
+        })
+    })?;
+    row(
+        &format!("CPU mirrors, rayon x{}", rayon::current_num_threads()),
+        &mut cpu_passes,
+    );
 
     // Where a contact frame's time goes: each stage submitted and waited for on its own,
     // averaged over eight of the paper's taps (every solid, every position).

@@ -5,6 +5,7 @@ use super::{camera, contact, elastomer, leds, Contact, Frame, HeightfieldGrid, R
 use crate::error::Result;
 use crate::sensor::Sensor;
 use glam::DVec2;
+use rayon::prelude::*;
 
 /// Everything the CPU pipeline computed for one frame.
 #[derive(Debug, Clone)]
@@ -94,4 +95,61 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
         texel_rect: footprint.map(|f| f.texels),
         pixel_rect: footprint.and_then(|f| f.pixels),
     })
+}
+
+/// A contact frame made the way the GPU renderer makes it, with the CPU mirrors: `reference`
+/// (the empty finger, e.g. from [`render`] once) with only the pixels whose rays the
+/// deformation reaches cast and shaded again, in parallel on rayon's threads. The
+/// alternative a user has to lavapipe on the same cores; `benches/render.rs` times it beside
+/// the GPU. Noise-free (the sensor's noise is not added).
+pub fn render_contact(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    reference: &Frame,
+    contact: &Contact,
+) -> Result<Frame> {
+    let mut frame = reference.clone();
+    let pose = contact.pose(sensor)?;
+    let config = &sensor.config.elastomer;
+    let reach = elastomer::blend_reach_mm(config);
+    let Some(footprint) = contact::footprint(sensor, grid, &pose, &contact.object, reach) else {
+        return Ok(frame);
+    };
+    let rect = footprint.texels;
+    let penetration = contact::penetration_field(sensor, grid, &pose, &contact.object, rect);
+    let meridian = elastomer::blend_meridian(grid, config, reach, &penetration, rect);
+    let (height, _) = elastomer::blend_azimuth(
+        &sensor.finger,
+        grid,
+        config,
+        reach,
+        &penetration,
+        &meridian,
+        rect,
+    );
+    let normals = camera::skin_normals(&sensor.finger, grid, &height, rect);
+    let Some(pixels) = footprint.pixels else {
+        return Ok(frame);
+    };
+    let w = sensor.width;
+    let touched = camera::select_touched(sensor, grid, &height, pixels);
+    let shaded: Vec<(usize, [u8; 3], f32)> = touched
+        .par_iter()
+        .map(|&i| {
+            let pixel = DVec2::new((i % w) as f64, (i / w) as f64);
+            let steps = sensor.config.render.ray_steps;
+            match camera::cast_ray(sensor, grid, &height, &normals, pixel, steps) {
+                Some(hit) => {
+                    let c = leds::shade(sensor, &hit).to_array().map(leds::encode);
+                    (i as usize, c, hit.indentation as f32)
+                }
+                None => (i as usize, [0; 3], 0.0),
+            }
+        })
+        .collect();
+    for (i, colour, depth) in shaded {
+        frame.rgba[i * 4..i * 4 + 3].copy_from_slice(&colour);
+        frame.indentation[i] = depth;
+    }
+    Ok(frame)
 }
