@@ -632,11 +632,12 @@ impl Renderer {
     fn copy_probes_to_map(&self, encoder: &mut wgpu::CommandEncoder) {
         let (w, h) = (self.sensor.width, self.sensor.height);
         let row_bytes = w * PROBES_BYTES_PER_PIXEL as u32;
-        let (rows_per_copy, copies) = if row_bytes % wgpu::COPY_BYTES_PER_ROW_ALIGNMENT == 0 {
-            (h, 1)
-        } else {
-            (1, h)
-        };
+        let (rows_per_copy, copies) =
+            if row_bytes.is_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) {
+                (h, 1)
+            } else {
+                (1, h)
+            };
         for k in 0..copies {
             encoder.copy_buffer_to_texture(
                 wgpu::TexelCopyBufferInfo {
