@@ -385,6 +385,11 @@ pub fn first_touch(
             step *= 0.5;
         }
     }
+    // The offset is known to the tolerance: a top point on the normal touches at 0 exactly
+    // (not at a rounding error's distance from it), so such contacts are placed as before.
+    if best_t.abs() <= FIRST_TOUCH_TOLERANCE_MM {
+        best_t = 0.0;
+    }
     let mut band = vec![best];
     band.extend(
         samples

@@ -189,7 +189,7 @@ impl ContactPose {
 }
 
 /// Parses a rigid pose: 16 numbers (a row-major 4x4 matrix whose last row is 0 0 0 1 and
-/// whose 3x3 part is a rotation) or 7 numbers (position x y z and unit quaternion w x y z),
+/// whose 3x3 part is orthonormal) or 7 numbers (position x y z and unit quaternion w x y z),
 /// separated by commas or spaces, in the camera frame.
 pub fn parse_pose(text: &str) -> Result<Hold> {
     let bad = |reason: String| GeltipError::input("--pose", reason);
@@ -218,10 +218,12 @@ pub fn parse_pose(text: &str) -> Result<Hold> {
                 .to_cols_array()
                 .iter()
                 .fold(0.0f64, |m, x| m.max(x.abs()));
-            if err > 1e-6 || r.determinant() < 0.0 {
+            // Orthonormal of either handedness: the frame `--at` places objects in (x along
+            // the meridian, y along the azimuth, z inward) is left-handed, and its labels'
+            // matrices must load back as the same pose.
+            if err > 1e-6 {
                 return Err(bad(format!(
-                    "the matrix's 3x3 part is not a rotation (off by {err:.2e}, determinant {:.3})",
-                    r.determinant()
+                    "the matrix's 3x3 part is not a rotation (orthonormal to {err:.2e}, not 1e-6)"
                 )));
             }
             Ok(Hold::Pose {
