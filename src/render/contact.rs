@@ -333,8 +333,11 @@ pub fn first_touch(
         let sp = finger.point_at(coord);
         touching_offset(object, object_from_world, sp.point - origin, b_obj, t_hi, t_lo)
     };
-    // Coarse samples: a square grid on the unrolled disc over the heightfield's extent.
-    let half = grid.half_size_mm;
+    // Coarse samples: a square grid on the unrolled disc over the whole finger (the
+    // heightfield may cover less of it than an object can touch, on a narrow lens).
+    let half = grid
+        .half_size_mm
+        .max(finger.junction_s() + finger.cylinder_length);
     let n = (2.0 * half / FIRST_TOUCH_SAMPLE_MM).ceil() as i64;
     let (z_lo, z_hi) = (a.z.min(c.z) - radius, a.z.max(c.z) + radius);
     let mut samples: Vec<(SurfaceCoord, f64)> = Vec::new();
