@@ -406,7 +406,9 @@ impl Press {
             } => {
                 // Backing off along the object's own -z (its +z points at the finger).
                 let b = -(world_from_object * DVec3::Z).normalize();
-                let search = (search.0, search.1 + f.radius + f.cylinder_length);
+                // Anywhere along its axis: from beyond the finger's far side to its top.
+                let span = origin.length() + f.radius + f.cylinder_length + search.1;
+                let search = (-span, span);
                 let touch = contact::first_touch(
                     f,
                     &grid,
@@ -452,6 +454,79 @@ impl Press {
             }
         }
     }
+}
+
+/// One contact of a scene file (`geltip render --scene`): the `render` flags' names.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneEntry {
+    object: String,
+    at: Option<String>,
+    #[serde(default)]
+    azimuth: f64,
+    #[serde(default)]
+    spin: f64,
+    #[serde(default)]
+    tilt: f64,
+    #[serde(default)]
+    tilt_towards: f64,
+    depth: Option<f64>,
+    /// 16 numbers (row-major 4x4) or 7 (x y z qw qx qy qz), instead of at/depth.
+    pose: Option<Vec<f64>>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    contacts: Vec<SceneEntry>,
+}
+
+/// Reads a scene: a JSON (`.json`) or TOML file with a list `contacts`, each an `object`
+/// and either `at` + `depth` (with optional `azimuth`, `spin`, `tilt`, `tilt_towards`) or a
+/// `pose`. The same object named twice is loaded once.
+pub fn load_scene(path: &std::path::Path) -> Result<Vec<Press>> {
+    let text = std::fs::read_to_string(path).map_err(|e| GeltipError::io(path, e))?;
+    let what = format!("scene {}", path.display());
+    let file: SceneFile = if path.extension().is_some_and(|e| e == "json") {
+        serde_json::from_str(&text).map_err(|e| GeltipError::input(&what, e.to_string()))?
+    } else {
+        toml::from_str(&text)
+            .map_err(|e| GeltipError::input(&what, e.message().to_string()))?
+    };
+    if file.contacts.is_empty() {
+        return Err(GeltipError::input(what, "lists no contacts"));
+    }
+    let mut objects: std::collections::HashMap<String, Arc<Object>> = Default::default();
+    let mut presses = Vec::with_capacity(file.contacts.len());
+    for (k, c) in file.contacts.into_iter().enumerate() {
+        let here = |reason: &str| GeltipError::input(format!("{what}: contact {}", k + 1), reason.to_string());
+        let object = match objects.get(&c.object) {
+            Some(o) => o.clone(),
+            None => {
+                let o = Arc::new(Object::from_arg(&c.object)?);
+                objects.insert(c.object.clone(), o.clone());
+                o
+            }
+        };
+        let hold = match (c.pose, c.at, c.depth) {
+            (Some(pose), None, None) => {
+                let text: Vec<String> = pose.iter().map(|v| v.to_string()).collect();
+                parse_pose(&text.join(","))?
+            }
+            (None, Some(at), Some(depth)) => Hold::Surface {
+                place: Place::parse(&at)?,
+                azimuth_deg: c.azimuth,
+                spin_deg: c.spin,
+                tilt_deg: c.tilt,
+                tilt_towards_deg: c.tilt_towards,
+                depth_mm: depth,
+            },
+            (Some(_), _, _) => return Err(here("give either a pose or at and depth, not both")),
+            _ => return Err(here("needs at and depth (or a pose)")),
+        };
+        presses.push(Press { object, hold });
+    }
+    Ok(presses)
 }
 
 /// Ground truth of one rendered contact.
