@@ -324,10 +324,10 @@ pub fn first_touch(
     let b_obj = object_from_world * b;
     let radius = object.bounding_radius();
     let (a, c) = (origin + t_hi * b, origin + t_lo * b);
-    let near_path = |p: DVec3| {
+    let near_path = |p: DVec3, slack: f64| {
         let ab = c - a;
         let k = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
-        (p - (a + k * ab)).length() <= radius + 1e-9
+        (p - (a + k * ab)).length() <= radius + slack + 1e-9
     };
     let eval = |coord: SurfaceCoord| {
         let sp = finger.point_at(coord);
@@ -340,29 +340,88 @@ pub fn first_touch(
         .max(finger.junction_s() + finger.cylinder_length);
     let n = (2.0 * half / FIRST_TOUCH_SAMPLE_MM).ceil() as i64;
     let (z_lo, z_hi) = (a.z.min(c.z) - radius, a.z.max(c.z) + radius);
+    // Arc length falls as height rises: the heights the swept object spans bound the s of
+    // the samples worth a look (checked before any trigonometry).
+    let s_of_height = |z: f64| {
+        let (r, d) = (finger.radius, finger.cylinder_length);
+        if z >= d {
+            r * ((z - d) / r).clamp(-1.0, 1.0).acos()
+        } else {
+            finger.junction_s() + (d - z)
+        }
+    };
+    let (s_lo, s_hi) = (s_of_height(z_hi) - 1e-9, (s_of_height(z_lo) + 1e-9).min(half));
+    // Coarse cells of 4 x 4 samples first, each traced with a tolerance of its radius: an
+    // upper bound on its samples' offsets (every surface point of a cell lies within that
+    // radius of its centre, and the SDF is 1-Lipschitz). Cells are refined sample by sample,
+    // the most promising first, only while their bound can still reach the best offset so
+    // far (less the band); a sample's trace stops once it falls below that too.
+    const SUB: i64 = 4;
+    let cell_mm = FIRST_TOUCH_SAMPLE_MM * SUB as f64;
+    let cell_radius = cell_mm * std::f64::consts::FRAC_1_SQRT_2 + 1e-9;
+    let cells = (n + SUB - 1) / SUB;
+    let first = ((half - s_hi - cell_mm) / cell_mm).floor().max(0.0) as i64;
+    let last = (cells - first).min(cells);
+    let mut bounds: Vec<(i64, i64, f64)> = Vec::new();
+    for cj in first..last {
+        for ci in first..last {
+            let disc = DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm - DVec2::splat(half);
+            let s = disc.length();
+            if s < s_lo - cell_radius || s > s_hi + cell_radius {
+                continue;
+            }
+            let sp = finger.point_at(SurfaceCoord::from_disc(disc));
+            if !near_path(sp.point, cell_radius) {
+                continue;
+            }
+            let q0 = object_from_world * (sp.point - origin);
+            let mut t = t_hi;
+            let mut bound = None;
+            for _ in 0..400 {
+                let d = object.sdf(q0 - t * b_obj);
+                if d <= cell_radius {
+                    bound = Some(t);
+                    break;
+                }
+                t -= d - cell_radius + 1e-6;
+                if t < t_lo {
+                    break;
+                }
+            }
+            if t >= t_lo && bound.is_none() {
+                bound = Some(t);
+            }
+            if let Some(u) = bound {
+                bounds.push((ci, cj, u));
+            }
+        }
+    }
+    bounds.sort_by(|x, y| y.2.total_cmp(&x.2));
+    let mut floor = t_lo;
     let mut samples: Vec<(SurfaceCoord, f64)> = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let disc = DVec2::new(i as f64 + 0.5, j as f64 + 0.5) * FIRST_TOUCH_SAMPLE_MM
-                - DVec2::splat(half);
-            let coord = SurfaceCoord::from_disc(disc);
-            if coord.s > half {
-                continue;
-            }
-            // Height falls as s grows: a cheap bound before the trigonometry.
-            let z = if coord.s <= finger.junction_s() {
-                finger.cylinder_length + finger.radius * (coord.s / finger.radius).cos()
-            } else {
-                finger.cylinder_length - (coord.s - finger.junction_s())
-            };
-            if z < z_lo - 1e-9 || z > z_hi + 1e-9 {
-                continue;
-            }
-            if !near_path(finger.point_at(coord).point) {
-                continue;
-            }
-            if let Some(t) = eval(coord) {
-                samples.push((coord, t));
+    for (ci, cj, u) in bounds {
+        if u < floor {
+            break;
+        }
+        for j in cj * SUB..(cj * SUB + SUB).min(n) {
+            for i in ci * SUB..(ci * SUB + SUB).min(n) {
+                let disc = DVec2::new(i as f64 + 0.5, j as f64 + 0.5) * FIRST_TOUCH_SAMPLE_MM
+                    - DVec2::splat(half);
+                let s = disc.length();
+                if s < s_lo || s > s_hi {
+                    continue;
+                }
+                let coord = SurfaceCoord::from_disc(disc);
+                let sp = finger.point_at(coord);
+                if !near_path(sp.point, 0.0) {
+                    continue;
+                }
+                let rel = sp.point - origin;
+                if let Some(t) = touching_offset(object, object_from_world, rel, b_obj, t_hi, floor)
+                {
+                    samples.push((coord, t));
+                    floor = floor.max(t - FIRST_TOUCH_BAND_MM);
+                }
             }
         }
     }
