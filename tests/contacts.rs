@@ -71,7 +71,11 @@ fn first_touch_offsets_match_the_geometry() {
         if solid == Solid::Tube {
             continue;
         }
-        for place in [Place::Rotation(0.0), Place::Rotation(45.0), Place::Translation(5.0)] {
+        for place in [
+            Place::Rotation(0.0),
+            Place::Rotation(45.0),
+            Place::Translation(5.0),
+        ] {
             let pose = press(solid, place, 30.0, 1.0).pose(&sensor).unwrap();
             assert_eq!(pose.first_touch_offset_mm, 0.0, "{solid:?} at {place:?}");
             assert_eq!(pose.origin, pose.point - 1.0 * pose.normal);
@@ -109,7 +113,11 @@ fn first_touch_offsets_match_the_geometry() {
 fn torus_marks_its_ring_not_its_hole() {
     let sensor = Sensor::preset("paper").unwrap();
     let mut r = paper();
-    for place in [Place::Rotation(60.0), Place::Rotation(0.0), Place::Translation(6.0)] {
+    for place in [
+        Place::Rotation(60.0),
+        Place::Rotation(0.0),
+        Place::Translation(6.0),
+    ] {
         let p = press(Solid::Torus, place, 20.0, 0.6);
         let (frame, truth) = render_one(&mut r, &p);
         let reference = r.reference().clone();
@@ -123,7 +131,11 @@ fn torus_marks_its_ring_not_its_hole() {
         // Pressed 0.6 mm along the contact normal; the ring meets skin whose normal leans
         // away from it, so the indentation along that skin's normal is about 0.6 cos(lean).
         let touch = truth.first_touch[0];
-        let lean = sensor.finger.point_at(sensor.finger.coord_of(touch)).normal.dot(truth.normal);
+        let lean = sensor
+            .finger
+            .point_at(sensor.finger.coord_of(touch))
+            .normal
+            .dot(truth.normal);
         assert!(
             (truth.indentation_reached_mm - 0.6 * lean).abs() < 0.03,
             "{place:?}: reached {} against {}",
@@ -134,7 +146,10 @@ fn torus_marks_its_ring_not_its_hole() {
         assert!(!truth.first_touch.is_empty());
         for q in &truth.first_touch {
             let d = (*q - truth.point).length();
-            assert!((2.5..5.5).contains(&d), "{place:?}: first touch {d} mm off the axis");
+            assert!(
+                (2.5..5.5).contains(&d),
+                "{place:?}: first touch {d} mm off the axis"
+            );
         }
         let deepest = truth.deepest_point.unwrap();
         let d = (deepest - truth.point).length();
@@ -144,14 +159,21 @@ fn torus_marks_its_ring_not_its_hole() {
         assert!((centre - truth.point).length() < 1.0, "{place:?}: {centre}");
         // The image: changed where the ring touches, unchanged in the hole.
         let hole = sensor.project(truth.point).unwrap();
-        assert_eq!(rgb_at(&frame, hole), rgb_at(&reference, hole), "{place:?}: hole");
+        assert_eq!(
+            rgb_at(&frame, hole),
+            rgb_at(&reference, hole),
+            "{place:?}: hole"
+        );
         let touched = sensor.project(deepest).unwrap();
         let at = |f: &Frame, du: f64, dv: f64| rgb_at(f, touched + glam::DVec2::new(du, dv));
         let changed = (-3..=3)
             .flat_map(|du| (-3..=3).map(move |dv| (du as f64, dv as f64)))
             .filter(|&(du, dv)| at(&frame, du, dv) != at(&reference, du, dv))
             .count();
-        assert!(changed > 10, "{place:?}: ring: {changed} of 49 pixels changed");
+        assert!(
+            changed > 10,
+            "{place:?}: ring: {changed} of 49 pixels changed"
+        );
         let index = |p: glam::DVec2| (p.y.round() * frame.width as f64 + p.x.round()) as usize;
         assert!(frame.indentation[index(touched)] > 0.3, "{place:?}");
         // In the hole the gel bulges out a few µm at most: not pressed.
@@ -188,7 +210,8 @@ fn flat_disc_indents_its_first_touch_line_by_the_depth() {
         // Within 10 µm of the tangent plane: 7.5 (1 - cos dphi) <= 0.01.
         assert!((q.y.atan2(q.x) - phi).abs() < 0.055, "{q}");
     }
-    let span = zs.iter().cloned().fold(f64::MIN, f64::max) - zs.iter().cloned().fold(f64::MAX, f64::min);
+    let span =
+        zs.iter().cloned().fold(f64::MIN, f64::max) - zs.iter().cloned().fold(f64::MAX, f64::min);
     assert!(span > 6.0, "first-touch line {span} mm long");
     for dz in [-4.0, -2.0, 0.0, 2.0, 4.0] {
         let coord = f.coord_of(pose.point + DVec3::new(0.0, 0.0, dz));
@@ -263,11 +286,18 @@ fn two_spheres_render_as_two_imprints() {
     assert_eq!(truths[1].mask_pixels, tb.mask_pixels);
     let (mut only_a, mut only_b) = (0, 0);
     for i in 0..(scene.width * scene.height) as usize {
-        let (in_a, in_b) = (px(&fa, i) != px(&reference, i), px(&fb, i) != px(&reference, i));
+        let (in_a, in_b) = (
+            px(&fa, i) != px(&reference, i),
+            px(&fb, i) != px(&reference, i),
+        );
         assert!(!(in_a && in_b), "the imprints should not overlap here");
         let want = if in_a { px(&fa, i) } else { px(&fb, i) };
         assert!(px(&scene, i) == want, "pixel {i}");
-        let want = if fa.indentation[i] != 0.0 { fa.indentation[i] } else { fb.indentation[i] };
+        let want = if fa.indentation[i] != 0.0 {
+            fa.indentation[i]
+        } else {
+            fb.indentation[i]
+        };
         assert!(scene.indentation[i] == want, "pixel {i}");
         only_a += in_a as u32;
         only_b += in_b as u32;
@@ -278,7 +308,10 @@ fn two_spheres_render_as_two_imprints() {
     let deep = press(Solid::Sphere, Place::Rotation(45.0), 90.0, 1.0);
     let shallow = press(Solid::Sphere, Place::Rotation(45.0), 90.0, 0.5);
     let (fd, _) = render_one(&mut r, &deep);
-    for order in [[deep.clone(), shallow.clone()], [shallow.clone(), deep.clone()]] {
+    for order in [
+        [deep.clone(), shallow.clone()],
+        [shallow.clone(), deep.clone()],
+    ] {
         let (f, _) = r.render_scene(&order).unwrap();
         assert!(f.rgba == fd.rgba);
     }
@@ -290,7 +323,15 @@ fn two_spheres_render_as_two_imprints() {
 fn matrix_pose_equals_at_spin_tilt() {
     let sensor = Sensor::preset("paper").unwrap();
     let mut r = paper();
-    let p = tilted(Solid::Cylinder, Place::Rotation(40.0), 25.0, 30.0, 15.0, 60.0, 0.7);
+    let p = tilted(
+        Solid::Cylinder,
+        Place::Rotation(40.0),
+        25.0,
+        30.0,
+        15.0,
+        60.0,
+        0.7,
+    );
     let (frame, truth) = render_one(&mut r, &p);
     let text: Vec<String> = truth.pose.iter().map(|v| v.to_string()).collect();
     let posed = Press {
@@ -308,16 +349,34 @@ fn matrix_pose_equals_at_spin_tilt() {
     let m = glam::DMat3::from_quat(q);
     let c = DVec3::new(1.0, -2.0, 30.0);
     let text = format!("{} {} {} {} {} {} {}", c.x, c.y, c.z, q.w, q.x, q.y, q.z);
-    let Hold::Pose { world_from_object, origin } = parse_pose(&text).unwrap() else {
+    let Hold::Pose {
+        world_from_object,
+        origin,
+    } = parse_pose(&text).unwrap()
+    else {
         panic!("not a pose")
     };
     assert!(world_from_object.abs_diff_eq(m, 1e-12) && origin == c);
     let rows = m.transpose().to_cols_array();
     let text = format!(
         "{} {} {} {} {} {} {} {} {} {} {} {} 0 0 0 1",
-        rows[0], rows[1], rows[2], c.x, rows[3], rows[4], rows[5], c.y, rows[6], rows[7], rows[8], c.z
+        rows[0],
+        rows[1],
+        rows[2],
+        c.x,
+        rows[3],
+        rows[4],
+        rows[5],
+        c.y,
+        rows[6],
+        rows[7],
+        rows[8],
+        c.z
     );
-    let Hold::Pose { world_from_object, .. } = parse_pose(&text).unwrap() else {
+    let Hold::Pose {
+        world_from_object, ..
+    } = parse_pose(&text).unwrap()
+    else {
         panic!("not a pose")
     };
     assert!(world_from_object.abs_diff_eq(m, 1e-12));
@@ -361,7 +420,10 @@ fn untouchable_and_invisible_contacts_say_so() {
     assert!(e.contains("does not touch"), "{e}");
     // Pressed through the shell: labelled.
     let mut r = paper();
-    let (_, truth) = render_one(&mut r, &press(Solid::Sphere, Place::Rotation(20.0), 0.0, 2.5));
+    let (_, truth) = render_one(
+        &mut r,
+        &press(Solid::Sphere, Place::Rotation(20.0), 0.0, 2.5),
+    );
     assert!(truth.over_pressed && truth.indentation_reached_mm > sensor.finger.shell_thickness);
     drop(r);
     // The webcam's 70 degree lens cannot see 15 mm down the side: no pixel, with the reason.
@@ -374,4 +436,3 @@ fn untouchable_and_invisible_contacts_say_so() {
     assert!(frame.rgba == w.reference().rgba);
     assert_eq!(truths[0].mask_pixels, 0);
 }
-

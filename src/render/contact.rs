@@ -331,7 +331,14 @@ pub fn first_touch(
     };
     let eval = |coord: SurfaceCoord| {
         let sp = finger.point_at(coord);
-        touching_offset(object, object_from_world, sp.point - origin, b_obj, t_hi, t_lo)
+        touching_offset(
+            object,
+            object_from_world,
+            sp.point - origin,
+            b_obj,
+            t_hi,
+            t_lo,
+        )
     };
     // Coarse samples: a square grid on the unrolled disc over the whole finger (the
     // heightfield may cover less of it than an object can touch, on a narrow lens).
@@ -350,7 +357,10 @@ pub fn first_touch(
             finger.junction_s() + (d - z)
         }
     };
-    let (s_lo, s_hi) = (s_of_height(z_hi) - 1e-9, (s_of_height(z_lo) + 1e-9).min(half));
+    let (s_lo, s_hi) = (
+        s_of_height(z_hi) - 1e-9,
+        (s_of_height(z_lo) + 1e-9).min(half),
+    );
     // Coarse cells of 4 x 4 samples first, each traced with a tolerance of its radius: an
     // upper bound on its samples' offsets (every surface point of a cell lies within that
     // radius of its centre, and the SDF is 1-Lipschitz). Cells are refined sample by sample,
@@ -432,7 +442,12 @@ pub fn first_touch(
     while step > FIRST_TOUCH_TOLERANCE_MM {
         let rho = parallel_radius(finger, best.s).max(1e-6);
         let mut moved = false;
-        for (ds, dphi) in [(step, 0.0), (-step, 0.0), (0.0, step / rho), (0.0, -step / rho)] {
+        for (ds, dphi) in [
+            (step, 0.0),
+            (-step, 0.0),
+            (0.0, step / rho),
+            (0.0, -step / rho),
+        ] {
             let coord = SurfaceCoord {
                 s: (best.s + ds).clamp(0.0, half),
                 phi: best.phi + dphi,

@@ -8,7 +8,10 @@
 //! output buffers, and read back together.
 
 use super::uniforms::{FrameUniform, SensorUniform};
-use super::{contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press, Rect};
+use super::{
+    contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press,
+    Rect,
+};
 use crate::error::{GeltipError, Result};
 use crate::gpu::readback::{read_buffer, read_ranges_with};
 use crate::gpu::shaders::create_compute_pipeline;
@@ -904,7 +907,13 @@ fn ground_truth(
             tilt_deg,
             tilt_towards_deg,
         ),
-        Hold::Pose { .. } => ("pose".to_string(), pose.coord.phi.to_degrees(), 0.0, 0.0, 0.0),
+        Hold::Pose { .. } => (
+            "pose".to_string(),
+            pose.coord.phi.to_degrees(),
+            0.0,
+            0.0,
+            0.0,
+        ),
     };
     GroundTruth {
         object: press.object.name().to_string(),

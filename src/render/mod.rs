@@ -409,15 +409,8 @@ impl Press {
                 // Anywhere along its axis: from beyond the finger's far side to its top.
                 let span = origin.length() + f.radius + f.cylinder_length + search.1;
                 let search = (-span, span);
-                let touch = contact::first_touch(
-                    f,
-                    &grid,
-                    object,
-                    world_from_object,
-                    origin,
-                    b,
-                    search,
-                );
+                let touch =
+                    contact::first_touch(f, &grid, object, world_from_object, origin, b, search);
                 let touch = match touch {
                     Some(t) if t.offset_mm >= 0.0 => t,
                     Some(t) => {
@@ -490,8 +483,7 @@ pub fn load_scene(path: &std::path::Path) -> Result<Vec<Press>> {
     let file: SceneFile = if path.extension().is_some_and(|e| e == "json") {
         serde_json::from_str(&text).map_err(|e| GeltipError::input(&what, e.to_string()))?
     } else {
-        toml::from_str(&text)
-            .map_err(|e| GeltipError::input(&what, e.message().to_string()))?
+        toml::from_str(&text).map_err(|e| GeltipError::input(&what, e.message().to_string()))?
     };
     if file.contacts.is_empty() {
         return Err(GeltipError::input(what, "lists no contacts"));
@@ -499,7 +491,9 @@ pub fn load_scene(path: &std::path::Path) -> Result<Vec<Press>> {
     let mut objects: std::collections::HashMap<String, Arc<Object>> = Default::default();
     let mut presses = Vec::with_capacity(file.contacts.len());
     for (k, c) in file.contacts.into_iter().enumerate() {
-        let here = |reason: &str| GeltipError::input(format!("{what}: contact {}", k + 1), reason.to_string());
+        let here = |reason: &str| {
+            GeltipError::input(format!("{what}: contact {}", k + 1), reason.to_string())
+        };
         let object = match objects.get(&c.object) {
             Some(o) => o.clone(),
             None => {
@@ -840,10 +834,30 @@ mod tests {
     #[test]
     fn disjoint_rects_cover_the_union_once() {
         let rects = [
-            Rect { x: 0, y: 0, w: 10, h: 8 },
-            Rect { x: 5, y: 4, w: 10, h: 10 },
-            Rect { x: 30, y: 30, w: 3, h: 3 },
-            Rect { x: 2, y: 2, w: 3, h: 3 },
+            Rect {
+                x: 0,
+                y: 0,
+                w: 10,
+                h: 8,
+            },
+            Rect {
+                x: 5,
+                y: 4,
+                w: 10,
+                h: 10,
+            },
+            Rect {
+                x: 30,
+                y: 30,
+                w: 3,
+                h: 3,
+            },
+            Rect {
+                x: 2,
+                y: 2,
+                w: 3,
+                h: 3,
+            },
         ];
         let pieces = Rect::disjoint(rects);
         let mut cover = vec![0u32; 40 * 40];
