@@ -529,8 +529,13 @@ mod tests {
             assert_eq!(Solid::from_name(s.name()), Some(s));
             assert_eq!(Solid::from_id(s.id()), Some(s));
         }
+        for (i, s) in Solid::EXTRA.into_iter().enumerate() {
+            assert_eq!(s.id() as usize, Solid::ALL.len() + i);
+            assert_eq!(Solid::from_name(s.name()), Some(s));
+            assert_eq!(Solid::from_id(s.id()), Some(s));
+        }
         assert_eq!(Solid::from_name("Cone"), None);
-        assert_eq!(Solid::from_id(7), None);
+        assert_eq!(Solid::from_id(9), None);
     }
 
     #[test]

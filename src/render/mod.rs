@@ -877,7 +877,8 @@ mod tests {
             }
         }
         let area: u64 = pieces.iter().map(|p| p.area()).sum();
-        assert_eq!(area, 80 + 100 - 16 + 9);
+        // The second overlaps the first by 5 x 4; the fourth lies inside the first.
+        assert_eq!(area, 80 + 100 - 20 + 9);
     }
 
     #[test]
