@@ -5,14 +5,15 @@
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
 //! into CPU preparation, GPU render (submit + wait) and readback (copy, map, unpack), with the
-//! pixels re-rendered per frame; and the CPU alternative (the CPU mirrors over the same
-//! footprint, on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
+//! pixels re-rendered per frame; one and two non-overlapping contacts per frame
+//! (`render_scene`); and the CPU alternative (the CPU mirrors over the same footprint,
+//! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps.
 
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::Solid;
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
-use geltip::render::{cpu, Contact};
+use geltip::render::{cpu, Contact, Press};
 use geltip::sensor::Sensor;
 use std::time::{Duration, Instant};
 
@@ -174,6 +175,37 @@ fn main() -> anyhow::Result<()> {
         Ok(t)
     })?;
     row(&format!("batches of {MAX_BATCH} contacts"), &mut batched);
+
+    // Several objects in one frame (Renderer::render_scene): each tap with its twin on the
+    // opposite side of the finger (azimuth + 180: imprints that do not overlap), against the
+    // same taps one per scene.
+    let ones: Vec<Press> = list.iter().map(Press::from).collect();
+    let twins: Vec<[Press; 2]> = list
+        .iter()
+        .map(|c| {
+            let mut twin = c.clone();
+            twin.azimuth_deg += 180.0;
+            [Press::from(c), Press::from(&twin)]
+        })
+        .collect();
+    let mut one_scene = passes(repeat, frames, || {
+        let mut t = Timings::default();
+        for p in &ones {
+            r.render_scene(std::slice::from_ref(p))?;
+            add(&mut t, r.timings());
+        }
+        Ok(t)
+    })?;
+    row("one contact per scene", &mut one_scene);
+    let mut two_scene = passes(repeat, frames, || {
+        let mut t = Timings::default();
+        for pair in &twins {
+            r.render_scene(pair)?;
+            add(&mut t, r.timings());
+        }
+        Ok(t)
+    })?;
+    row("two contacts per scene", &mut two_scene);
 
     // What a user could run instead on the same cores: the CPU mirrors over the same
     // footprint (the GPU's reference frame as the empty finger), rayon over the touched

@@ -82,5 +82,8 @@ fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
     if c.x <= sensor.half_size_mm {
         p = penetration_at(c);
     }
-    penetration[j * sensor.texels + i] = p;
+    // Several objects in one frame: each contact pass keeps the deepest press (the frame
+    // clears the heightfield first, so one object writes its own penetration).
+    let idx = j * sensor.texels + i;
+    penetration[idx] = max(penetration[idx], p);
 }

@@ -7,7 +7,7 @@ use geltip::localise::{load_frame, localise, Method};
 use geltip::object::{Object, Solid};
 use geltip::output;
 use geltip::render::gpu::Renderer;
-use geltip::render::{Contact, Frame, Place};
+use geltip::render::{load_scene, parse_pose, Frame, Hold, Place, Press};
 use geltip::sensor::{Sensor, PRESETS};
 use glam::{DVec2, DVec3};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -61,15 +61,15 @@ enum Command {
         #[arg(long)]
         sensor: String,
         /// Render the empty finger (the reference frame detectors subtract).
-        #[arg(long, conflicts_with_all = ["object", "at", "depth", "azimuth", "spin", "labels"])]
+        #[arg(long, conflicts_with_all = ["object", "at", "depth", "azimuth", "spin", "labels", "pose", "scene", "tilt", "tilt_towards"])]
         reference: bool,
         /// A built-in solid (cone, sphere, irregular-prism, cylinder, edge, tube, slab) or a
         /// mesh file (.obj, .gltf, .glb) whose +z points at the finger.
-        #[arg(long, required_unless_present = "reference")]
+        #[arg(long, required_unless_present_any = ["reference", "scene"], conflicts_with = "scene")]
         object: Option<String>,
         /// Where: rotation=<deg> about the tip (0 = tip, 90 = junction), translation=<mm>
         /// along the side below the junction, or s=<mm> of arc length from the tip.
-        #[arg(long, required_unless_present = "reference")]
+        #[arg(long, required_unless_present_any = ["reference", "pose", "scene"], conflicts_with_all = ["pose", "scene"])]
         at: Option<String>,
         /// Azimuth of the contact about the finger's axis, degrees (0 = image +x).
         #[arg(long, default_value_t = 0.0)]
@@ -77,9 +77,27 @@ enum Command {
         /// The object's rotation about the contact normal, degrees.
         #[arg(long, default_value_t = 0.0)]
         spin: f64,
-        /// Press depth along the surface normal, mm.
-        #[arg(long, required_unless_present = "reference")]
+        /// Tilt of the object's axis away from the contact normal, degrees (-90..90).
+        #[arg(long, default_value_t = 0.0)]
+        tilt: f64,
+        /// Direction the object's outer end leans to, in the tangent plane: degrees from the
+        /// meridian (away from the tip) towards increasing azimuth.
+        #[arg(long = "tilt-towards", default_value_t = 0.0)]
+        tilt_towards: f64,
+        /// Press depth beyond the object's first touch of the undeformed finger, along the
+        /// surface normal, mm.
+        #[arg(long, required_unless_present_any = ["reference", "pose", "scene"], conflicts_with_all = ["pose", "scene"])]
         depth: Option<f64>,
+        /// A rigid pose in the camera frame instead of --at/--depth: 16 numbers (row-major
+        /// 4x4 matrix) or 7 (x y z qw qx qy qz), comma- or space-separated; the depth is
+        /// what the pose implies (in the labels). The labels' `pose` loads back as is.
+        #[arg(long, conflicts_with_all = ["azimuth", "spin", "tilt", "tilt_towards", "scene"])]
+        pose: Option<String>,
+        /// Several contacts in one frame: a JSON (.json) or TOML file listing `contacts`,
+        /// each with the flags' names (object, at, depth, azimuth, spin, tilt, tilt_towards)
+        /// or object and pose. The labels become a list plus the union mask.
+        #[arg(long)]
+        scene: Option<PathBuf>,
         /// Output PNG.
         #[arg(short = 'o', long = "output")]
         output: PathBuf,
@@ -194,7 +212,11 @@ fn run(cli: Cli) -> Result<()> {
             at,
             azimuth,
             spin,
+            tilt,
+            tilt_towards,
             depth,
+            pose,
+            scene,
             output: png,
             labels,
             depth_map,
@@ -206,30 +228,49 @@ fn run(cli: Cli) -> Result<()> {
                 println!("{}", json!({ "image": png, "reference": true }));
                 return Ok(());
             }
-            let (object, at, depth) = (
-                object.context("--object is required")?,
-                at.context("--at is required")?,
-                depth.context("--depth is required")?,
-            );
-            let contact = Contact {
-                object: Arc::new(Object::from_arg(&object)?),
-                place: Place::parse(&at)?,
-                azimuth_deg: azimuth,
-                spin_deg: spin,
-                depth_mm: depth,
+            let presses = match (&scene, &pose) {
+                (Some(path), _) => load_scene(path)?,
+                (None, Some(pose)) => vec![Press {
+                    object: Arc::new(Object::from_arg(&object.context("--object is required")?)?),
+                    hold: parse_pose(pose)?,
+                }],
+                (None, None) => vec![Press {
+                    object: Arc::new(Object::from_arg(&object.context("--object is required")?)?),
+                    hold: Hold::Surface {
+                        place: Place::parse(&at.context("--at is required")?)?,
+                        azimuth_deg: azimuth,
+                        spin_deg: spin,
+                        tilt_deg: tilt,
+                        tilt_towards_deg: tilt_towards,
+                        depth_mm: depth.context("--depth is required")?,
+                    },
+                }],
             };
             // Refuse a bad pose before paying for the GPU's start-up.
-            contact.pose(&sensor)?;
-            let mut renderer = Renderer::new(&sensor)?;
-            let (frame, truth) = renderer.render(&contact)?;
-            write_frame(&frame, &png, depth_map.as_ref())?;
-            if let Some(path) = &labels {
-                output::write_json(path, &truth.to_json())?;
+            for p in &presses {
+                p.pose(&sensor)?;
             }
-            if truth.over_pressed {
+            let mut renderer = Renderer::new(&sensor)?;
+            let (frame, truths) = renderer.render_scene(&presses)?;
+            write_frame(&frame, &png, depth_map.as_ref())?;
+            let labels_json = if scene.is_some() {
+                let (count, bbox) = frame.mask();
+                json!({
+                    "contacts": truths.iter().map(|t| t.to_json()).collect::<Vec<_>>(),
+                    "mask_pixels": count,
+                    "mask_bbox": bbox,
+                    "over_pressed": truths.iter().any(|t| t.over_pressed),
+                })
+            } else {
+                truths[0].to_json()
+            };
+            if let Some(path) = &labels {
+                output::write_json(path, &labels_json)?;
+            }
+            if truths.iter().any(|t| t.over_pressed) {
                 eprintln!("warning: the object pressed the gel against the rigid shell (depth beyond {} mm)", sensor.finger.shell_thickness);
             }
-            println!("{}", truth.to_json());
+            println!("{labels_json}");
         }
         Command::Localise {
             sensor,

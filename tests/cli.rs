@@ -256,3 +256,124 @@ fn bad_render_and_localise_input() {
     assert_eq!(code, 1);
     assert!(error_line(&err).contains("/nonexistent.png"), "{err}");
 }
+
+/// `--pose` with the labels' pose renders the bytes of the `--at/--spin/--tilt` render; a
+/// scene file gives one label per contact plus the union mask; bad scenes and poses are
+/// one-line errors.
+#[test]
+fn render_pose_and_scene() {
+    let (a_png, a_json) = (temp("tilted.png"), temp("tilted.json"));
+    let (code, _, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--object",
+        "cylinder",
+        "--at",
+        "rotation=40",
+        "--azimuth",
+        "25",
+        "--spin",
+        "30",
+        "--tilt",
+        "15",
+        "--tilt-towards",
+        "60",
+        "--depth",
+        "0.7",
+        "-o",
+        a_png.to_str().unwrap(),
+        "--labels",
+        a_json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let labels: Value = serde_json::from_str(&std::fs::read_to_string(&a_json).unwrap()).unwrap();
+    assert_eq!(labels["score_against"], "contact_centre");
+    let pose: Vec<String> = labels["pose"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap().to_string())
+        .collect();
+    let b_png = temp("posed.png");
+    let (code, out, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--object",
+        "cylinder",
+        "--pose",
+        &pose.join(","),
+        "-o",
+        b_png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(json(&out)["depth_mm"].as_f64().unwrap() > 0.0);
+    assert!(std::fs::read(&a_png).unwrap() == std::fs::read(&b_png).unwrap());
+
+    let scene = temp("scene.toml");
+    std::fs::write(
+        &scene,
+        "[[contacts]]\nobject = \"sphere\"\nat = \"rotation=30\"\ndepth = 1.0\n\n[[contacts]]\nobject = \"torus\"\nat = \"translation=8\"\nazimuth = 180\ndepth = 0.6\n",
+    )
+    .unwrap();
+    let png = temp("scene.png");
+    let (code, out, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--scene",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v = json(&out);
+    let contacts = v["contacts"].as_array().unwrap();
+    assert_eq!(contacts.len(), 2);
+    assert_eq!(contacts[1]["object"], "torus");
+    // Each contact's mask counts the pressed pixels of its own footprint's rectangle: the
+    // union is no more than their sum (rectangles may overlap) and no less than either.
+    let per: Vec<u64> = contacts
+        .iter()
+        .map(|c| c["mask_pixels"].as_u64().unwrap())
+        .collect();
+    let union = v["mask_pixels"].as_u64().unwrap();
+    assert!(
+        union <= per[0] + per[1] && union >= per[0].max(per[1]) && per[1] > 1000,
+        "{union} {per:?}"
+    );
+
+    std::fs::write(
+        &scene,
+        "[[contacts]]\nobject = \"sphere\"\nat = \"rotation=30\"\n",
+    )
+    .unwrap();
+    let (code, _, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--scene",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_ne!(code, 0);
+    assert!(
+        error_line(&err).contains("contact 1: needs at and depth"),
+        "{err}"
+    );
+    let (code, _, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--object",
+        "sphere",
+        "--pose",
+        "1,0,0,0,0,-1,0,0,0,0,-1,40,0,0,0,1",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_ne!(code, 0);
+    assert!(error_line(&err).contains("short of touching"), "{err}");
+}

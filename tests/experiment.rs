@@ -47,7 +47,7 @@ fn surface_detector_on_rendered_contacts() {
                 "{solid:?} at {place:?}, azimuth {azimuth}: {:?}",
                 d.note
             );
-            let err = (d.point.unwrap() - truth.point).length();
+            let err = (d.point.unwrap() - truth.scoring_point()).length();
             assert!(
                 err < 0.6,
                 "{solid:?} at {place:?}, azimuth {azimuth}: {err:.3} mm off"
@@ -74,7 +74,7 @@ fn paper_detector_on_rendered_contacts() {
                 .unwrap();
             if d.detected {
                 found += 1;
-                let err = (d.point.unwrap() - truth.point).length();
+                let err = (d.point.unwrap() - truth.scoring_point()).length();
                 assert!(err < 4.0, "{solid:?} at {place:?}: {err:.3} mm off");
             } else {
                 assert!(d.note.is_some() && d.point.is_none() && d.pixel.is_none());

@@ -338,6 +338,10 @@ fn wgsl_constants_equal_the_rust_dimensions() {
         ("SLAB_X", vec![SLAB_X]),
         ("SLAB_Y", vec![SLAB_Y]),
         ("SLAB_Z", vec![SLAB_Z]),
+        ("TORUS_MAJOR_RADIUS", vec![TORUS_MAJOR_RADIUS]),
+        ("TORUS_MINOR_RADIUS", vec![TORUS_MINOR_RADIUS]),
+        ("DISC_RADIUS", vec![DISC_RADIUS]),
+        ("DISC_THICKNESS", vec![DISC_THICKNESS]),
     ];
     let (_, module) = parse_shader();
     let mut found = std::collections::BTreeMap::new();
@@ -353,7 +357,7 @@ fn wgsl_constants_equal_the_rust_dimensions() {
         let want: Vec<f64> = values.iter().map(|&v| f64::from(v as f32)).collect();
         assert_eq!(got, want, "OBJ_{name} differs from dims::{name}");
     }
-    for s in Solid::ALL {
+    for s in Solid::ALL.into_iter().chain(Solid::EXTRA) {
         let name = format!("SOLID_{}", s.name().to_uppercase().replace('-', "_"));
         let got = found
             .remove(&name)

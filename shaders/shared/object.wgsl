@@ -19,6 +19,8 @@ const OBJ_SOLID_CYLINDER: u32 = 3u;
 const OBJ_SOLID_EDGE: u32 = 4u;
 const OBJ_SOLID_TUBE: u32 = 5u;
 const OBJ_SOLID_SLAB: u32 = 6u;
+const OBJ_SOLID_TORUS: u32 = 7u;
+const OBJ_SOLID_DISC: u32 = 8u;
 
 // Dimensions (mm). Twin: `pub mod dims` in src/object/solids.rs.
 const OBJ_CONE_RADIUS: f32 = 5.0;
@@ -43,6 +45,10 @@ const OBJ_TUBE_HEIGHT: f32 = 10.0;
 const OBJ_SLAB_X: f32 = 10.0;
 const OBJ_SLAB_Y: f32 = 6.0;
 const OBJ_SLAB_Z: f32 = 3.0;
+const OBJ_TORUS_MAJOR_RADIUS: f32 = 4.0;
+const OBJ_TORUS_MINOR_RADIUS: f32 = 1.0;
+const OBJ_DISC_RADIUS: f32 = 5.0;
+const OBJ_DISC_THICKNESS: f32 = 1.0;
 
 // What solid_sdf returns for an unknown id: far away, so nothing touches.
 const OBJ_FAR: f32 = 1.0e30;
@@ -156,6 +162,17 @@ fn solid_sdf(id: u32, p: vec3<f32>) -> f32 {
                 p,
                 vec3<f32>(0.0, 0.0, -OBJ_SLAB_Z / 2.0),
                 vec3<f32>(OBJ_SLAB_X / 2.0, OBJ_SLAB_Y / 2.0, OBJ_SLAB_Z / 2.0),
+            );
+        }
+        case OBJ_SOLID_TORUS: {
+            d = length(vec2<f32>(r - OBJ_TORUS_MAJOR_RADIUS, p.z + OBJ_TORUS_MINOR_RADIUS))
+                - OBJ_TORUS_MINOR_RADIUS;
+        }
+        case OBJ_SOLID_DISC: {
+            d = obj_sd_box2(
+                vec2<f32>(r, p.z),
+                vec2<f32>(0.0, -OBJ_DISC_THICKNESS / 2.0),
+                vec2<f32>(OBJ_DISC_RADIUS, OBJ_DISC_THICKNESS / 2.0),
             );
         }
         default: {}

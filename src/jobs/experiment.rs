@@ -163,7 +163,7 @@ impl Report {
     /// The two tables of the paper, ours beside theirs, as Markdown.
     pub fn tables_markdown(&self) -> String {
         let mut md = format!(
-            "Sensor `{}`, taps {} mm deep at azimuth {}°; error = distance (mm) between the predicted and the true contact point, mean ± sample std over the detected taps; missed taps are counted, not averaged in.\n\n",
+            "Sensor `{}`, taps {} mm deep at azimuth {}°; error = distance (mm) between the predicted point and the contact's centre (the indented region's centroid on the surface), mean ± sample std over the detected taps; missed taps are counted, not averaged in.\n\n",
             self.sensor, self.protocol.depth_mm, self.protocol.azimuth_deg
         );
         let positions: Vec<&str> = POSITIONS.iter().map(|(_, l)| *l).collect();
@@ -240,9 +240,9 @@ impl Report {
                 t.object.name(),
                 POSITIONS[t.position].1,
                 t.method.name(),
-                t.truth.point.x,
-                t.truth.point.y,
-                t.truth.point.z,
+                t.truth.scoring_point().x,
+                t.truth.scoring_point().y,
+                t.truth.scoring_point().z,
                 t.error_mm.map(|e| e.to_string()).unwrap_or_default(),
                 t.error_mm.is_some(),
                 t.confidence,
@@ -324,7 +324,7 @@ pub fn run(
                     object,
                     position,
                     method,
-                    error_mm: prediction.map(|p| (p - truth.point).length()),
+                    error_mm: prediction.map(|p| (p - truth.scoring_point()).length()),
                     prediction,
                     confidence: d.confidence,
                     truth: truth.clone(),

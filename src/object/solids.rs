@@ -65,6 +65,14 @@ pub mod dims {
     pub const SLAB_Z: f64 = 3.0;
     /// Segments around round solids in their meshes (not used by the SDFs).
     pub const ROUND_SEGMENTS: u32 = 64;
+    /// Torus (a ring, not one of the paper's seven): radius of its centre circle, axis z.
+    pub const TORUS_MAJOR_RADIUS: f64 = 4.0;
+    /// Torus: radius of its tube (top at z = 0, centre circle at z = -TORUS_MINOR_RADIUS).
+    pub const TORUS_MINOR_RADIUS: f64 = 1.0;
+    /// Disc (a coin, not one of the paper's seven): radius, flat face at z = 0.
+    pub const DISC_RADIUS: f64 = 5.0;
+    /// Disc: thickness.
+    pub const DISC_THICKNESS: f64 = 1.0;
 }
 
 use dims::*;
@@ -93,6 +101,11 @@ pub enum Solid {
     Edge,
     Tube,
     Slab,
+    /// Not one of the paper's seven: a ring whose top is a circle around the axis (its
+    /// origin lies in the hole).
+    Torus,
+    /// Not one of the paper's seven: a thin flat disc.
+    Disc,
 }
 
 impl Solid {
@@ -107,6 +120,10 @@ impl Solid {
         Solid::Slab,
     ];
 
+    /// Extra solids for testing contacts that are not a single top point (not in the
+    /// paper's experiment, not written by `geltip objects`).
+    pub const EXTRA: [Solid; 2] = [Solid::Torus, Solid::Disc];
+
     /// The name used on the command line and for asset files.
     pub fn name(self) -> &'static str {
         match self {
@@ -117,15 +134,20 @@ impl Solid {
             Solid::Edge => "edge",
             Solid::Tube => "tube",
             Solid::Slab => "slab",
+            Solid::Torus => "torus",
+            Solid::Disc => "disc",
         }
     }
 
     /// The solid called `name` (exactly as [`Solid::name`] writes it), if any.
     pub fn from_name(name: &str) -> Option<Solid> {
-        Solid::ALL.into_iter().find(|s| s.name() == name)
+        Solid::ALL
+            .into_iter()
+            .chain(Solid::EXTRA)
+            .find(|s| s.name() == name)
     }
 
-    /// The solid's id, 0..=6, as used by `solid_sdf(id, p)` in `shaders/shared/object.wgsl`.
+    /// The solid's id, 0..=6 for the seven (7, 8 for the extras), as used by `solid_sdf(id, p)` in `shaders/shared/object.wgsl`.
     pub fn id(self) -> u32 {
         match self {
             Solid::Cone => 0,
@@ -135,12 +157,17 @@ impl Solid {
             Solid::Edge => 4,
             Solid::Tube => 5,
             Solid::Slab => 6,
+            Solid::Torus => 7,
+            Solid::Disc => 8,
         }
     }
 
     /// The solid with id `id`, if any.
     pub fn from_id(id: u32) -> Option<Solid> {
-        Solid::ALL.into_iter().find(|s| s.id() == id)
+        Solid::ALL
+            .into_iter()
+            .chain(Solid::EXTRA)
+            .find(|s| s.id() == id)
     }
 
     /// Exact signed distance (mm) from `p` (object frame) to the solid: negative inside.
@@ -180,6 +207,15 @@ impl Solid {
                 DVec3::new(0.0, 0.0, -SLAB_Z / 2.0),
                 DVec3::new(SLAB_X / 2.0, SLAB_Y / 2.0, SLAB_Z / 2.0),
             ),
+            Solid::Torus => {
+                DVec2::new(r - TORUS_MAJOR_RADIUS, p.z + TORUS_MINOR_RADIUS).length()
+                    - TORUS_MINOR_RADIUS
+            }
+            Solid::Disc => sd_box2(
+                DVec2::new(r, p.z),
+                DVec2::new(0.0, -DISC_THICKNESS / 2.0),
+                DVec2::new(DISC_RADIUS, DISC_THICKNESS / 2.0),
+            ),
         }
     }
 
@@ -193,6 +229,10 @@ impl Solid {
             Solid::Edge => DVec3::new(EDGE_LENGTH / 2.0, EDGE_WIDTH / 2.0, EDGE_HEIGHT).length(),
             Solid::Tube => TUBE_OUTER_RADIUS.hypot(TUBE_HEIGHT),
             Solid::Slab => DVec3::new(SLAB_X / 2.0, SLAB_Y / 2.0, SLAB_Z).length(),
+            Solid::Torus => {
+                (TORUS_MAJOR_RADIUS + TORUS_MINOR_RADIUS).hypot(2.0 * TORUS_MINOR_RADIUS)
+            }
+            Solid::Disc => DISC_RADIUS.hypot(DISC_THICKNESS),
         }
     }
 
@@ -207,6 +247,8 @@ impl Solid {
             Solid::Edge => (EDGE_LENGTH / 2.0).hypot(EDGE_WIDTH / 2.0),
             Solid::Tube => TUBE_OUTER_RADIUS,
             Solid::Slab => (SLAB_X / 2.0).hypot(SLAB_Y / 2.0),
+            Solid::Torus => TORUS_MAJOR_RADIUS + TORUS_MINOR_RADIUS,
+            Solid::Disc => DISC_RADIUS,
         }
     }
 
@@ -292,6 +334,28 @@ impl Solid {
                 ],
                 0.0,
                 -SLAB_Z,
+            ),
+            Solid::Torus => {
+                let profile: Vec<DVec2> = (0..n)
+                    .map(|k| {
+                        let a = 2.0 * PI * f64::from(k) / f64::from(n);
+                        v2(
+                            TORUS_MAJOR_RADIUS + TORUS_MINOR_RADIUS * a.sin(),
+                            TORUS_MINOR_RADIUS * a.cos() - TORUS_MINOR_RADIUS,
+                        )
+                    })
+                    .collect();
+                revolve(&profile, true, n)
+            }
+            Solid::Disc => revolve(
+                &[
+                    v2(0.0, 0.0),
+                    v2(DISC_RADIUS, 0.0),
+                    v2(DISC_RADIUS, -DISC_THICKNESS),
+                    v2(0.0, -DISC_THICKNESS),
+                ],
+                false,
+                n,
             ),
         };
         if mesh.signed_volume() < 0.0 {
@@ -465,8 +529,13 @@ mod tests {
             assert_eq!(Solid::from_name(s.name()), Some(s));
             assert_eq!(Solid::from_id(s.id()), Some(s));
         }
+        for (i, s) in Solid::EXTRA.into_iter().enumerate() {
+            assert_eq!(s.id() as usize, Solid::ALL.len() + i);
+            assert_eq!(Solid::from_name(s.name()), Some(s));
+            assert_eq!(Solid::from_id(s.id()), Some(s));
+        }
         assert_eq!(Solid::from_name("Cone"), None);
-        assert_eq!(Solid::from_id(7), None);
+        assert_eq!(Solid::from_id(9), None);
     }
 
     #[test]

@@ -102,7 +102,7 @@ pub fn footprint(
     blend_reach_mm: f64,
 ) -> Option<Footprint> {
     let f = &sensor.finger;
-    let max_depth = max_trace_depth(f, pose.depth_mm);
+    let max_depth = pose.trace_depth_mm;
     const CELL: u32 = 2;
     let cells = grid.texels.div_ceil(CELL);
     let cell_mm = grid.texel_mm() * CELL as f64;
@@ -238,7 +238,7 @@ pub fn penetration_field(
 ) -> Vec<f32> {
     let f = &sensor.finger;
     let n = grid.texels as usize;
-    let max_depth = max_trace_depth(f, pose.depth_mm);
+    let max_depth = pose.trace_depth_mm;
     let drape = sensor.config.elastomer.drape_mm;
     let mut field = vec![0.0f32; n * n];
     for j in rect.y..rect.y + rect.h {
@@ -252,4 +252,293 @@ pub fn penetration_field(
         }
     }
     field
+}
+
+/// Tolerance (mm) to which [`first_touch`] finds the first-touch offset: each surface
+/// sample's touching offset is traced to this, and the best sample is refined on the surface
+/// until its step falls below it.
+pub const FIRST_TOUCH_TOLERANCE_MM: f64 = 1e-6;
+
+/// Spacing (mm, on the unrolled disc) of the coarse surface samples [`first_touch`] searches
+/// before refining; thinner object features than this along the surface could be missed.
+pub const FIRST_TOUCH_SAMPLE_MM: f64 = 0.25;
+
+/// Surface points within this offset (mm) of the first touch count as touched first.
+pub const FIRST_TOUCH_BAND_MM: f64 = 0.01;
+
+/// Where an object moving towards the finger first touches its undeformed surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FirstTouch {
+    /// The offset along the backing-off direction `b` at which it touches: the object placed
+    /// at `origin + offset b` just touches the surface (and at any larger offset does not).
+    pub offset_mm: f64,
+    /// The surface point touched first (refined to [`FIRST_TOUCH_TOLERANCE_MM`]).
+    pub point: SurfaceCoord,
+    /// Coarse surface samples touched within [`FIRST_TOUCH_BAND_MM`] of the first touch
+    /// (a ring's circle, a face's line), the refined point first.
+    pub band: Vec<SurfaceCoord>,
+}
+
+/// The largest offset t in [`t_lo`, `t_hi`] at which surface point `sp` lies inside the
+/// object placed at `origin + t b` (sphere tracing downwards from `t_hi`), or None.
+fn touching_offset(
+    object: &Object,
+    object_from_world: glam::DMat3,
+    rel: DVec3,
+    b_obj: DVec3,
+    t_hi: f64,
+    t_lo: f64,
+) -> Option<f64> {
+    // The surface point in the frame of the object at offset t: object_from_world (S - O) - t b.
+    let q0 = object_from_world * rel;
+    let mut t = t_hi;
+    for _ in 0..400 {
+        let d = object.sdf(q0 - t * b_obj);
+        if d <= FIRST_TOUCH_TOLERANCE_MM {
+            return Some(t);
+        }
+        t -= d;
+        if t < t_lo {
+            return None;
+        }
+    }
+    None
+}
+
+/// First touch of `object` (rotation `world_from_object`, origin `origin` at offset 0),
+/// moved along `-b` (unit `b`: the backing-off direction) towards the undeformed finger,
+/// searched over offsets `t_lo..=t_hi`. Coarse surface samples every
+/// [`FIRST_TOUCH_SAMPLE_MM`] within the object's reach of its path, each traced to
+/// [`FIRST_TOUCH_TOLERANCE_MM`], then the best refined by a pattern search on the surface.
+/// `None` when the object touches nothing on that path.
+pub fn first_touch(
+    finger: &Finger,
+    grid: &HeightfieldGrid,
+    object: &Object,
+    world_from_object: glam::DMat3,
+    origin: DVec3,
+    b: DVec3,
+    (t_lo, t_hi): (f64, f64),
+) -> Option<FirstTouch> {
+    let object_from_world = world_from_object.transpose();
+    let b_obj = object_from_world * b;
+    let radius = object.bounding_radius();
+    let (a, c) = (origin + t_hi * b, origin + t_lo * b);
+    let near_path = |p: DVec3, slack: f64| {
+        let ab = c - a;
+        let k = ((p - a).dot(ab) / ab.length_squared().max(1e-300)).clamp(0.0, 1.0);
+        (p - (a + k * ab)).length() <= radius + slack + 1e-9
+    };
+    let eval = |coord: SurfaceCoord| {
+        let sp = finger.point_at(coord);
+        touching_offset(
+            object,
+            object_from_world,
+            sp.point - origin,
+            b_obj,
+            t_hi,
+            t_lo,
+        )
+    };
+    // Coarse samples: a square grid on the unrolled disc over the whole finger (the
+    // heightfield may cover less of it than an object can touch, on a narrow lens).
+    let half = grid
+        .half_size_mm
+        .max(finger.junction_s() + finger.cylinder_length);
+    let n = (2.0 * half / FIRST_TOUCH_SAMPLE_MM).ceil() as i64;
+    let (z_lo, z_hi) = (a.z.min(c.z) - radius, a.z.max(c.z) + radius);
+    // Arc length falls as height rises: the heights the swept object spans bound the s of
+    // the samples worth a look (checked before any trigonometry).
+    let s_of_height = |z: f64| {
+        let (r, d) = (finger.radius, finger.cylinder_length);
+        if z >= d {
+            r * ((z - d) / r).clamp(-1.0, 1.0).acos()
+        } else {
+            finger.junction_s() + (d - z)
+        }
+    };
+    let (s_lo, s_hi) = (
+        s_of_height(z_hi) - 1e-9,
+        (s_of_height(z_lo) + 1e-9).min(half),
+    );
+    // Coarse cells of 4 x 4 samples first, each traced with a tolerance of its radius: an
+    // upper bound on its samples' offsets (every surface point of a cell lies within that
+    // radius of its centre, and the SDF is 1-Lipschitz). Cells are refined sample by sample,
+    // the most promising first, only while their bound can still reach the best offset so
+    // far (less the band); a sample's trace stops once it falls below that too.
+    const SUB: i64 = 4;
+    let cell_mm = FIRST_TOUCH_SAMPLE_MM * SUB as f64;
+    let cell_radius = cell_mm * std::f64::consts::FRAC_1_SQRT_2 + 1e-9;
+    let cells = (n + SUB - 1) / SUB;
+    let first = ((half - s_hi - cell_mm) / cell_mm).floor().max(0.0) as i64;
+    let last = (cells - first).min(cells);
+    let mut bounds: Vec<(i64, i64, f64)> = Vec::new();
+    for cj in first..last {
+        for ci in first..last {
+            let disc = DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm - DVec2::splat(half);
+            let s = disc.length();
+            if s < s_lo - cell_radius || s > s_hi + cell_radius {
+                continue;
+            }
+            let sp = finger.point_at(SurfaceCoord::from_disc(disc));
+            if !near_path(sp.point, cell_radius) {
+                continue;
+            }
+            let q0 = object_from_world * (sp.point - origin);
+            let mut t = t_hi;
+            let mut bound = None;
+            for _ in 0..400 {
+                let d = object.sdf(q0 - t * b_obj);
+                if d <= cell_radius {
+                    bound = Some(t);
+                    break;
+                }
+                t -= d - cell_radius + 1e-6;
+                if t < t_lo {
+                    break;
+                }
+            }
+            if t >= t_lo && bound.is_none() {
+                bound = Some(t);
+            }
+            if let Some(u) = bound {
+                bounds.push((ci, cj, u));
+            }
+        }
+    }
+    bounds.sort_by(|x, y| y.2.total_cmp(&x.2));
+    let mut floor = t_lo;
+    let mut samples: Vec<(SurfaceCoord, f64)> = Vec::new();
+    for (ci, cj, u) in bounds {
+        if u < floor {
+            break;
+        }
+        for j in cj * SUB..(cj * SUB + SUB).min(n) {
+            for i in ci * SUB..(ci * SUB + SUB).min(n) {
+                let disc = DVec2::new(i as f64 + 0.5, j as f64 + 0.5) * FIRST_TOUCH_SAMPLE_MM
+                    - DVec2::splat(half);
+                let s = disc.length();
+                if s < s_lo || s > s_hi {
+                    continue;
+                }
+                let coord = SurfaceCoord::from_disc(disc);
+                let sp = finger.point_at(coord);
+                if !near_path(sp.point, 0.0) {
+                    continue;
+                }
+                let rel = sp.point - origin;
+                if let Some(t) = touching_offset(object, object_from_world, rel, b_obj, t_hi, floor)
+                {
+                    samples.push((coord, t));
+                    floor = floor.max(t - FIRST_TOUCH_BAND_MM);
+                }
+            }
+        }
+    }
+    let &(mut best, mut best_t) = samples.iter().max_by(|x, y| x.1.total_cmp(&y.1))?;
+    // Pattern search on the surface around the best sample: steps along the meridian and
+    // the parallel (as arc lengths), halved when no neighbour is better.
+    let mut step = FIRST_TOUCH_SAMPLE_MM;
+    while step > FIRST_TOUCH_TOLERANCE_MM {
+        let rho = parallel_radius(finger, best.s).max(1e-6);
+        let mut moved = false;
+        for (ds, dphi) in [
+            (step, 0.0),
+            (-step, 0.0),
+            (0.0, step / rho),
+            (0.0, -step / rho),
+        ] {
+            let coord = SurfaceCoord {
+                s: (best.s + ds).clamp(0.0, half),
+                phi: best.phi + dphi,
+            };
+            if let Some(t) = eval(coord) {
+                if t > best_t + 1e-12 {
+                    (best, best_t, moved) = (coord, t, true);
+                }
+            }
+        }
+        if !moved {
+            step *= 0.5;
+        }
+    }
+    // The offset is known to the tolerance: a top point on the normal touches at 0 exactly
+    // (not at a rounding error's distance from it), so such contacts are placed as before.
+    if best_t.abs() <= FIRST_TOUCH_TOLERANCE_MM {
+        best_t = 0.0;
+    }
+    let mut band = vec![best];
+    band.extend(
+        samples
+            .iter()
+            .filter(|(_, t)| *t >= best_t - FIRST_TOUCH_BAND_MM)
+            .map(|(c, _)| *c),
+    );
+    Some(FirstTouch {
+        offset_mm: best_t,
+        point: best,
+        band,
+    })
+}
+
+/// What the contact stage's penetration field says about one contact, on the undeformed
+/// surface: the labels a detector is scored against.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IndentationLabels {
+    /// The deepest penetration over the field (mm): the indentation actually reached.
+    pub reached_mm: f64,
+    /// Where it is reached (on the undeformed surface); None when nothing is pressed.
+    pub deepest: Option<DVec3>,
+    /// Centroid of the indented area (texels pressed beyond [`super::MASK_THRESHOLD_MM`]),
+    /// weighted by penetration and surface area, projected back onto the surface; None when
+    /// nothing is pressed. A ring's lies in its middle, a face's in the face's middle.
+    pub centre: Option<DVec3>,
+    /// Surface area (mm²) of the indented texels.
+    pub area_mm2: f64,
+}
+
+/// Labels of a penetration field over `rect` (see [`penetration_field`]).
+pub fn indentation_labels(
+    finger: &Finger,
+    grid: &HeightfieldGrid,
+    field: &[f32],
+    rect: Rect,
+) -> IndentationLabels {
+    let n = grid.texels as usize;
+    let texel_area = grid.texel_mm() * grid.texel_mm();
+    let (mut reached, mut deepest) = (0.0f64, None);
+    let (mut sum, mut weight, mut area) = (DVec3::ZERO, 0.0, 0.0);
+    for j in rect.y..rect.y + rect.h {
+        for i in rect.x..rect.x + rect.w {
+            let p = field[j as usize * n + i as usize] as f64;
+            if p <= super::MASK_THRESHOLD_MM {
+                continue;
+            }
+            let coord = SurfaceCoord::from_disc(grid.texel_centre(i, j));
+            let point = finger.point_at(coord).point;
+            if p > reached {
+                (reached, deepest) = (p, Some(point));
+            }
+            // Surface area of a disc texel: rho(s) / s times its disc area.
+            let jac = if coord.s > 1e-9 {
+                parallel_radius(finger, coord.s) / coord.s
+            } else {
+                1.0
+            };
+            let a = texel_area * jac;
+            area += a;
+            sum += p * a * point;
+            weight += p * a;
+        }
+    }
+    let centre = (weight > 0.0).then(|| {
+        let c = sum / weight;
+        finger.point_at(finger.coord_of(c)).point
+    });
+    IndentationLabels {
+        reached_mm: reached,
+        deepest,
+        centre,
+        area_mm2: area,
+    }
 }

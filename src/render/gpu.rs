@@ -8,7 +8,10 @@
 //! output buffers, and read back together.
 
 use super::uniforms::{FrameUniform, SensorUniform};
-use super::{contact, elastomer, Contact, Frame, GroundTruth, HeightfieldGrid, Rect};
+use super::{
+    contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press,
+    Rect,
+};
 use crate::error::{GeltipError, Result};
 use crate::gpu::readback::{read_buffer, read_ranges_with};
 use crate::gpu::shaders::create_compute_pipeline;
@@ -748,16 +751,16 @@ impl Renderer {
         Ok(())
     }
 
-    fn prepare(&mut self, contact: &Contact, noise_seed: u32) -> Result<Prepared> {
+    fn prepare(&mut self, press: &Press, noise_seed: u32) -> Result<Prepared> {
         let sensor = &self.sensor;
-        let pose = contact.pose(sensor)?;
+        let pose = press.pose(sensor)?;
         let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
-        let footprint = contact::footprint(sensor, &self.grid, &pose, &contact.object, reach);
+        let footprint = contact::footprint(sensor, &self.grid, &pose, &press.object, reach);
         let texel_rect = footprint.map(|f| f.texels);
         let pixel_rect = footprint.and_then(|f| f.pixels);
-        let max_depth = contact::max_trace_depth(&sensor.finger, pose.depth_mm);
-        if let Object::Mesh { grid, .. } = contact.object.as_ref() {
-            let key = Arc::as_ptr(&contact.object) as usize;
+        let max_depth = pose.trace_depth_mm;
+        if let Object::Mesh { grid, .. } = press.object.as_ref() {
+            let key = Arc::as_ptr(&press.object) as usize;
             if !self.grids.contains_key(&key) {
                 // A bound on the cache: a long run may load many meshes.
                 if self.grids.len() >= MAX_CACHED_GRIDS {
@@ -771,48 +774,24 @@ impl Renderer {
                             contents: bytemuck::cast_slice(&grid.values),
                             usage: wgpu::BufferUsages::STORAGE,
                         });
-                self.grids.insert(key, (contact.object.clone(), buffer));
+                self.grids.insert(key, (press.object.clone(), buffer));
             }
         }
         let uniform = FrameUniform::contact(
             &pose,
-            &contact.object,
+            &press.object,
             max_depth,
             texel_rect,
             pixel_rect,
             noise_seed,
         );
-        let f = &sensor.finger;
-        let truth = GroundTruth {
-            object: contact.object.name().to_string(),
-            place: contact.place.label(),
-            point: pose.point,
-            pixel: sensor.project(pose.point).map_err(|why| why.to_string()),
-            normal: pose.normal,
-            depth_mm: contact.depth_mm,
-            region: pose.region,
-            s_mm: pose.coord.s,
-            azimuth_deg: contact.azimuth_deg,
-            spin_deg: contact.spin_deg,
-            mask_pixels: 0,
-            mask_bbox: None,
-            over_pressed: false,
-            contact_indentation_mm: contact::penetration(
-                f,
-                &pose,
-                &contact.object,
-                pose.coord,
-                max_depth,
-                sensor.config.elastomer.drape_mm,
-                contact::TRACE_EPSILON_MM,
-            ),
-        };
+        let truth = ground_truth(sensor, &self.grid, press, &pose, texel_rect);
         Ok(Prepared {
             uniform,
             truth,
             texel_rect,
             pixel_rect,
-            object: contact.object.clone(),
+            object: press.object.clone(),
         })
     }
 
@@ -871,7 +850,7 @@ impl Renderer {
                 self.seed_counter = self.seed_counter.wrapping_add(1);
                 let seed = self.sensor.config.render.noise_seed
                     ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
-                prepared.push(self.prepare(c, seed)?);
+                prepared.push(self.prepare(&Press::from(c), seed)?);
             }
             total.prepare += start.elapsed();
             let frames = self.run(&prepared, &mut total)?;
@@ -1022,7 +1001,7 @@ impl Renderer {
     /// Renders one contact stage by stage, waiting after each, and returns each stage's wall
     /// time (for the benchmark's breakdown; slower than [`Renderer::render`]).
     pub fn profile_stages(&mut self, contact: &Contact) -> Result<Vec<(&'static str, Duration)>> {
-        let p = self.prepare(contact, 0)?;
+        let p = self.prepare(&Press::from(contact), 0)?;
         let uniform = self.uniform_buffer(&p.uniform);
         let bind = self.bind_group(&uniform, 0, Some(&p.object));
         let region = match (self.dirty, p.texel_rect) {
@@ -1136,5 +1115,230 @@ impl Renderer {
             .into_iter()
             .map(|v| (v[3] != 0.0).then(|| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)))
             .collect())
+    }
+}
+
+/// The labels of one press, from its pose and (on the CPU, over its footprint's texels) the
+/// contact stage's penetration field; the mask and over-press are filled in after rendering.
+fn ground_truth(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    press: &Press,
+    pose: &ContactPose,
+    texel_rect: Option<Rect>,
+) -> GroundTruth {
+    let f = &sensor.finger;
+    let labels = texel_rect.map(|rect| {
+        let field = contact::penetration_field(sensor, grid, pose, &press.object, rect);
+        contact::indentation_labels(f, grid, &field, rect)
+    });
+    let (place, azimuth_deg, spin_deg, tilt_deg, tilt_towards_deg) = match press.hold {
+        Hold::Surface {
+            place,
+            azimuth_deg,
+            spin_deg,
+            tilt_deg,
+            tilt_towards_deg,
+            ..
+        } => (
+            place.label(),
+            azimuth_deg,
+            spin_deg,
+            tilt_deg,
+            tilt_towards_deg,
+        ),
+        Hold::Pose { .. } => (
+            "pose".to_string(),
+            pose.coord.phi.to_degrees(),
+            0.0,
+            0.0,
+            0.0,
+        ),
+    };
+    GroundTruth {
+        object: press.object.name().to_string(),
+        place,
+        point: pose.point,
+        pixel: sensor.project(pose.point).map_err(|why| why.to_string()),
+        normal: pose.normal,
+        depth_mm: pose.depth_mm,
+        region: pose.region,
+        s_mm: pose.coord.s,
+        azimuth_deg,
+        spin_deg,
+        mask_pixels: 0,
+        mask_bbox: None,
+        over_pressed: false,
+        contact_indentation_mm: contact::penetration(
+            f,
+            pose,
+            &press.object,
+            pose.coord,
+            pose.trace_depth_mm,
+            sensor.config.elastomer.drape_mm,
+            contact::TRACE_EPSILON_MM,
+        ),
+        tilt_deg,
+        tilt_towards_deg,
+        pose: pose.matrix_row_major(),
+        first_touch_offset_mm: pose.first_touch_offset_mm,
+        first_touch: pose.first_touch.clone(),
+        indentation_reached_mm: labels.as_ref().map_or(0.0, |l| l.reached_mm),
+        deepest_point: labels.as_ref().and_then(|l| l.deepest),
+        contact_centre: labels.as_ref().and_then(|l| l.centre),
+        indented_area_mm2: labels.as_ref().map_or(0.0, |l| l.area_mm2),
+    }
+}
+
+impl Renderer {
+    /// Renders several objects pressed into the finger at once, as one frame: the skin is
+    /// pushed by whichever object is deepest at each texel (the contact stage runs once per
+    /// object over its own footprint, keeping the maximum), and the elastomer, camera and LED
+    /// stages run once over the union of the footprints (split into disjoint rectangles, so
+    /// the cost follows the footprints' area, not the number of objects). One label per
+    /// press, in order: its mask is the pressed pixels inside its own footprint's pixel
+    /// rectangle; `over_pressed` is the frame's (any object against the shell).
+    pub fn render_scene(&mut self, presses: &[Press]) -> Result<(Frame, Vec<GroundTruth>)> {
+        if presses.is_empty() {
+            return Err(GeltipError::input("scene", "no contacts to render"));
+        }
+        let start = Instant::now();
+        self.seed_counter = self.seed_counter.wrapping_add(1);
+        let seed =
+            self.sensor.config.render.noise_seed ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
+        let prepared: Vec<Prepared> = presses
+            .iter()
+            .map(|p| self.prepare(p, seed))
+            .collect::<Result<_>>()?;
+        let texel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.texel_rect));
+        let pixel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.pixel_rect));
+        let mut timings = Timings {
+            prepare: start.elapsed(),
+            ..Timings::default()
+        };
+        let render_start = Instant::now();
+        let (w, h) = (self.sensor.width, self.sensor.height);
+        let piece_uniform = |t: Option<Rect>, r: Option<Rect>| {
+            let mut u = prepared[0].uniform;
+            u.texel_rect = t.map_or([0; 4], |t| [t.x, t.y, t.w, t.h]);
+            u.pixel_rect = r.map_or([0; 4], |r| [r.x, r.y, r.w, r.h]);
+            u
+        };
+        let contact_uniforms: Vec<wgpu::Buffer> = prepared
+            .iter()
+            .map(|p| self.uniform_buffer(&p.uniform))
+            .collect();
+        let contact_binds: Vec<wgpu::BindGroup> = prepared
+            .iter()
+            .zip(&contact_uniforms)
+            .map(|(p, u)| self.bind_group(u, 0, Some(&p.object)))
+            .collect();
+        let texel_uniforms: Vec<wgpu::Buffer> = texel_pieces
+            .iter()
+            .map(|&t| self.uniform_buffer(&piece_uniform(Some(t), None)))
+            .collect();
+        let texel_binds: Vec<wgpu::BindGroup> = texel_uniforms
+            .iter()
+            .map(|u| self.bind_group(u, 0, None))
+            .collect();
+        let pixel_uniforms: Vec<wgpu::Buffer> = pixel_pieces
+            .iter()
+            .map(|&r| self.uniform_buffer(&piece_uniform(None, Some(r))))
+            .collect();
+        let pixel_binds: Vec<wgpu::BindGroup> = pixel_uniforms
+            .iter()
+            .map(|u| self.bind_group(u, 0, None))
+            .collect();
+        let whole_uniform = self.uniform_buffer(&piece_uniform(None, None));
+        let whole_bind = self.bind_group(&whole_uniform, 0, None);
+        // The rows the scene can change (every row with noise), as `run` does per contact.
+        let pixel_span = pixel_pieces.iter().copied().reduce(|a, b| a.union(&b));
+        let (start, count) = self.changed_rows(pixel_span);
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(
+            &self.reference_image,
+            start * 4,
+            &self.image,
+            start * 4,
+            Some(count * 4),
+        );
+        encoder.clear_buffer(&self.indentation, start * 4, Some(count * 4));
+        encoder.clear_buffer(&self.counters, 0, Some(COUNTER_HEADER_BYTES));
+        if let Some(span) = texel_pieces.iter().copied().reduce(|a, b| a.union(&b)) {
+            // The contact stage keeps the deepest penetration: it must start from zero, and
+            // the maps must lose what the last frame left outside this one.
+            let region = self.dirty.map_or(span, |d| d.union(&span));
+            self.clear_heightfield(&mut encoder, Some(region));
+            for (k, (_, pipeline, map)) in self.heightfield_stages().into_iter().enumerate() {
+                if k == 0 {
+                    for (p, bind) in prepared.iter().zip(&contact_binds) {
+                        if let Some(t) = p.texel_rect {
+                            let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
+                            Self::dispatch(&mut encoder, pipeline, bind, g);
+                        }
+                    }
+                } else {
+                    for (t, bind) in texel_pieces.iter().zip(&texel_binds) {
+                        let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
+                        Self::dispatch(&mut encoder, pipeline, bind, g);
+                    }
+                }
+                self.copy_to_map(&mut encoder, map, Some(region));
+            }
+            self.dirty = Some(span);
+        }
+        if !pixel_pieces.is_empty() {
+            for (r, bind) in pixel_pieces.iter().zip(&pixel_binds) {
+                let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
+                Self::dispatch(&mut encoder, &self.pipelines.select_touched, bind, g);
+            }
+            encoder.copy_buffer_to_buffer(
+                &self.counters,
+                TOUCHED_DISPATCH * 4,
+                &self.dispatch_args,
+                0,
+                Some(12),
+            );
+            self.dispatch_indirect(&mut encoder, &self.pipelines.camera_touched, &whole_bind, 0);
+        }
+        if self.sensor.config.render.noise > 0.0 {
+            Self::dispatch(
+                &mut encoder,
+                &self.pipelines.add_noise,
+                &whole_bind,
+                (groups(w, WORKGROUP), groups(h, WORKGROUP)),
+            );
+        }
+        self.ctx.submit_and_wait("rendering a scene", encoder)?;
+        let rendered = Instant::now();
+        timings.render = rendered - render_start;
+        let mut parts = self.read_frames(&[(start, count)])?.into_iter();
+        let (Some(Part::Rgba(rgba)), Some(Part::Indentation(indentation)), Some(Part::Counters(c))) =
+            (parts.next(), parts.next(), parts.next())
+        else {
+            return Err(GeltipError::Gpu("read back no scene frame".to_string()));
+        };
+        timings.touched_pixels = c[TOUCHED_COUNT] as u64;
+        let frame = Frame {
+            width: w,
+            height: h,
+            rgba,
+            indentation,
+        };
+        let over_pressed = c[OVER_PRESSED] > 0;
+        let truths = prepared
+            .into_iter()
+            .map(|p| {
+                let mut truth = p.truth;
+                let (count, bbox) = p.pixel_rect.map_or((0, None), |r| frame.mask_in(r));
+                truth.mask_pixels = count;
+                truth.mask_bbox = bbox;
+                truth.over_pressed = over_pressed;
+                truth
+            })
+            .collect();
+        timings.readback = rendered.elapsed();
+        self.timings = timings;
+        Ok((frame, truths))
     }
 }

@@ -91,21 +91,83 @@ pub struct Contact {
     pub depth_mm: f64,
 }
 
-/// Where a contact sits and how its object is oriented, in the camera frame.
+/// How an object is held against the finger.
 #[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Hold {
+    /// At a place on the surface: the object's axis along the inward normal, spun about it,
+    /// tilted `tilt_deg` away from it towards the tangent direction `tilt_towards_deg`
+    /// (measured from the meridian away from the tip, towards increasing azimuth), then
+    /// brought along the normal until it first touches the undeformed finger and pressed
+    /// `depth_mm` further.
+    Surface {
+        place: Place,
+        azimuth_deg: f64,
+        spin_deg: f64,
+        tilt_deg: f64,
+        tilt_towards_deg: f64,
+        depth_mm: f64,
+    },
+    /// A rigid pose in the camera frame: object-local points p map to
+    /// `world_from_object * p + origin`. The press depth is whatever the pose implies: how far
+    /// the object lies beyond its first touch along its own +z axis.
+    Pose {
+        world_from_object: DMat3,
+        origin: DVec3,
+    },
+}
+
+/// One object held against the finger, in any pose: the general form of [`Contact`]
+/// (which is a `Press` with no tilt).
+#[derive(Debug, Clone)]
+pub struct Press {
+    pub object: Arc<Object>,
+    pub hold: Hold,
+}
+
+impl From<&Contact> for Press {
+    fn from(c: &Contact) -> Press {
+        Press {
+            object: c.object.clone(),
+            hold: Hold::Surface {
+                place: c.place,
+                azimuth_deg: c.azimuth_deg,
+                spin_deg: c.spin_deg,
+                tilt_deg: 0.0,
+                tilt_towards_deg: 0.0,
+                depth_mm: c.depth_mm,
+            },
+        }
+    }
+}
+
+/// Where a contact sits and how its object is oriented, in the camera frame.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ContactPose {
-    /// Contact point on the undeformed surface.
+    /// Contact point on the undeformed surface: the place asked for, or for a rigid pose the
+    /// point it touches first.
     pub point: DVec3,
     /// Outward surface normal there.
     pub normal: DVec3,
     pub coord: SurfaceCoord,
     pub region: Region,
     /// Rotation taking object-local vectors to the camera frame. Object-local +z points into
-    /// the finger (along -normal): objects stand on their base with their top at the origin.
+    /// the finger (along -normal when untilted): objects stand on their base with their top
+    /// at the origin.
     pub world_from_object: DMat3,
-    /// The object's origin (its top) in the camera frame: the contact point pushed in by depth.
+    /// The object's origin (its top) in the camera frame.
     pub origin: DVec3,
+    /// How far the object is pressed beyond its first touch (mm): asked for, or implied by a
+    /// rigid pose.
     pub depth_mm: f64,
+    /// How far from its top's place on the normal the object first touches the undeformed
+    /// finger (mm, outward positive): 0 for a top point on the normal, negative when the
+    /// object had to come closer (a ring's hole).
+    pub first_touch_offset_mm: f64,
+    /// Surface points touched first: the refined point, then the coarse samples within
+    /// [`contact::FIRST_TOUCH_BAND_MM`] (a ring's circle).
+    pub first_touch: Vec<DVec3>,
+    /// Deepest inward distance the contact stage traces from (mm).
+    pub trace_depth_mm: f64,
 }
 
 impl ContactPose {
@@ -113,77 +175,352 @@ impl ContactPose {
     pub fn to_object(&self, p: DVec3) -> DVec3 {
         self.world_from_object.transpose() * (p - self.origin)
     }
+
+    /// The pose as a 4x4 matrix (row-major: camera-frame point = M (object point, 1)).
+    pub fn matrix_row_major(&self) -> [f64; 16] {
+        let m = glam::DMat4::from_cols(
+            self.world_from_object.x_axis.extend(0.0),
+            self.world_from_object.y_axis.extend(0.0),
+            self.world_from_object.z_axis.extend(0.0),
+            self.origin.extend(1.0),
+        );
+        m.transpose().to_cols_array()
+    }
+}
+
+/// Parses a rigid pose: 16 numbers (a row-major 4x4 matrix whose last row is 0 0 0 1 and
+/// whose 3x3 part is orthonormal) or 7 numbers (position x y z and unit quaternion w x y z),
+/// separated by commas or spaces, in the camera frame.
+pub fn parse_pose(text: &str) -> Result<Hold> {
+    let bad = |reason: String| GeltipError::input("--pose", reason);
+    let v: Vec<f64> = text
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| {
+            t.parse::<f64>()
+                .map_err(|_| bad(format!("'{t}' is not a number")))
+        })
+        .collect::<Result<_>>()?;
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(bad(format!("{x} is not a finite number")));
+    }
+    match v.len() {
+        16 => {
+            let r = DMat3::from_cols(
+                DVec3::new(v[0], v[4], v[8]),
+                DVec3::new(v[1], v[5], v[9]),
+                DVec3::new(v[2], v[6], v[10]),
+            );
+            if (v[12], v[13], v[14], v[15]) != (0.0, 0.0, 0.0, 1.0) {
+                return Err(bad("the matrix's last row must be 0 0 0 1".into()));
+            }
+            let err = (r.transpose() * r - DMat3::IDENTITY)
+                .to_cols_array()
+                .iter()
+                .fold(0.0f64, |m, x| m.max(x.abs()));
+            // Orthonormal of either handedness: the frame `--at` places objects in (x along
+            // the meridian, y along the azimuth, z inward) is left-handed, and its labels'
+            // matrices must load back as the same pose.
+            if err > 1e-6 {
+                return Err(bad(format!(
+                    "the matrix's 3x3 part is not a rotation (orthonormal to {err:.2e}, not 1e-6)"
+                )));
+            }
+            Ok(Hold::Pose {
+                world_from_object: r,
+                origin: DVec3::new(v[3], v[7], v[11]),
+            })
+        }
+        7 => {
+            let q = glam::DQuat::from_xyzw(v[4], v[5], v[6], v[3]);
+            if (q.length() - 1.0).abs() > 1e-6 {
+                return Err(bad(format!(
+                    "the quaternion w x y z must have length 1, got {:.6}",
+                    q.length()
+                )));
+            }
+            Ok(Hold::Pose {
+                world_from_object: DMat3::from_quat(q),
+                origin: DVec3::new(v[0], v[1], v[2]),
+            })
+        }
+        n => Err(bad(format!(
+            "expected 16 numbers (row-major 4x4 matrix) or 7 (x y z qw qx qy qz), got {n}"
+        ))),
+    }
+}
+
+fn finite(what: &str, v: f64) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(GeltipError::input(
+            what,
+            format!("must be a finite number, got {v}"),
+        ))
+    }
 }
 
 impl Contact {
     /// Checks the contact's numbers and places it on `sensor`'s finger.
     pub fn pose(&self, sensor: &Sensor) -> Result<ContactPose> {
+        Press::from(self).pose(sensor)
+    }
+}
+
+impl Press {
+    /// The object's name.
+    pub fn name(&self) -> &str {
+        self.object.name()
+    }
+
+    /// Checks the press's numbers and places it on `sensor`'s finger: by first touch and
+    /// depth, or as posed.
+    pub fn pose(&self, sensor: &Sensor) -> Result<ContactPose> {
         let f = &sensor.finger;
-        for (what, v) in [
-            ("--azimuth", self.azimuth_deg),
-            ("--spin", self.spin_deg),
-            ("--depth", self.depth_mm),
-        ] {
-            if !v.is_finite() {
+        let grid = HeightfieldGrid::for_sensor(sensor);
+        let object = self.object.as_ref();
+        let check_reach = |trace_depth: f64| {
+            let reach = trace_depth + sensor.config.elastomer.drape_mm;
+            if object.exact_reach_mm() < reach {
                 return Err(GeltipError::input(
-                    what,
-                    format!("must be a finite number, got {v}"),
+                    format!("object {}", object.name()),
+                    format!(
+                        "its baked SDF is exact only {:.2} mm around it; this sensor's drape and press need {reach:.2} mm",
+                        object.exact_reach_mm()
+                    ),
                 ));
             }
-        }
-        if self.depth_mm < 0.0 {
-            return Err(GeltipError::input(
-                "--depth",
-                format!("a press depth cannot be negative, got {} mm", self.depth_mm),
-            ));
-        }
-        let reach = contact::max_trace_depth(f, self.depth_mm) + sensor.config.elastomer.drape_mm;
-        if self.object.exact_reach_mm() < reach {
-            return Err(GeltipError::input(
-                format!("object {}", self.object.name()),
-                format!(
-                    "its baked SDF is exact only {:.2} mm around it; this sensor's drape and press need {reach:.2} mm",
-                    self.object.exact_reach_mm()
-                ),
-            ));
-        }
-        let s = self.place.arc_length(sensor);
-        // The finger runs from the tip down to the camera's plane (further where the lens sees
-        // behind it). A contact the lens cannot see renders as the empty finger, and its
-        // ground truth says why it has no pixel.
-        let s_max = (heightfield_extent(sensor) - margin_mm(sensor))
-            .max(f.junction_s() + f.cylinder_length);
-        if !(0.0..=s_max).contains(&s) {
-            return Err(GeltipError::input(
-                "--at",
-                format!(
-                    "{} is {s:.3} mm from the tip along the surface; the finger runs 0..{s_max:.3} mm",
-                    self.place.label()
-                ),
-            ));
-        }
-        let coord = SurfaceCoord {
-            s,
-            phi: self.azimuth_deg.to_radians(),
+            Ok(())
         };
-        let sp = f.point_at(coord);
-        let (e_s, e_phi) = f.tangents_at(coord);
-        // Object x along the meridian (away from the tip), y along the azimuth, z inward;
-        // then the object's spin about its own z.
-        let (sin, cos) = self.spin_deg.to_radians().sin_cos();
-        let x = cos * e_s + sin * e_phi;
-        let y = -sin * e_s + cos * e_phi;
-        let z = -sp.normal;
-        Ok(ContactPose {
-            point: sp.point,
-            normal: sp.normal,
-            coord,
-            region: sp.region,
-            world_from_object: DMat3::from_cols(x, y, z),
-            origin: sp.point - self.depth_mm * sp.normal,
-            depth_mm: self.depth_mm,
-        })
+        // Offsets searched for the first touch: from where the object is clear of the
+        // (convex) finger down to a finger's radius inside it.
+        let search = (-f.radius, object.bounding_radius() + 1e-3);
+        match self.hold {
+            Hold::Surface {
+                place,
+                azimuth_deg,
+                spin_deg,
+                tilt_deg,
+                tilt_towards_deg,
+                depth_mm,
+            } => {
+                finite("--azimuth", azimuth_deg)?;
+                finite("--spin", spin_deg)?;
+                finite("--tilt", tilt_deg)?;
+                finite("--tilt-towards", tilt_towards_deg)?;
+                finite("--depth", depth_mm)?;
+                if depth_mm < 0.0 {
+                    return Err(GeltipError::input(
+                        "--depth",
+                        format!("a press depth cannot be negative, got {depth_mm} mm"),
+                    ));
+                }
+                if !(0.0..90.0).contains(&tilt_deg.abs()) {
+                    return Err(GeltipError::input(
+                        "--tilt",
+                        format!("must lie in (-90, 90) degrees, got {tilt_deg}"),
+                    ));
+                }
+                let s = place.arc_length(sensor);
+                // The finger runs from the tip down to the camera's plane (further where the
+                // lens sees behind it). A contact the lens cannot see renders as the empty
+                // finger, and its ground truth says why it has no pixel.
+                let s_max = (heightfield_extent(sensor) - margin_mm(sensor))
+                    .max(f.junction_s() + f.cylinder_length);
+                if !(0.0..=s_max).contains(&s) {
+                    return Err(GeltipError::input(
+                        "--at",
+                        format!(
+                            "{} is {s:.3} mm from the tip along the surface; the finger runs 0..{s_max:.3} mm",
+                            place.label()
+                        ),
+                    ));
+                }
+                let coord = SurfaceCoord {
+                    s,
+                    phi: azimuth_deg.to_radians(),
+                };
+                let sp = f.point_at(coord);
+                let (e_s, e_phi) = f.tangents_at(coord);
+                // Object x along the meridian (away from the tip), y along the azimuth, z
+                // inward; then the object's spin about its own z; then its tilt.
+                let (sin, cos) = spin_deg.to_radians().sin_cos();
+                let x = cos * e_s + sin * e_phi;
+                let y = -sin * e_s + cos * e_phi;
+                let z = -sp.normal;
+                let mut world_from_object = DMat3::from_cols(x, y, z);
+                if tilt_deg != 0.0 {
+                    // The object's outward axis (+normal when untilted) leans towards t.
+                    let (ts, tc) = tilt_towards_deg.to_radians().sin_cos();
+                    let t = tc * e_s + ts * e_phi;
+                    let axis = sp.normal.cross(t).normalize();
+                    world_from_object =
+                        DMat3::from_axis_angle(axis, tilt_deg.to_radians()) * world_from_object;
+                }
+                let touch = contact::first_touch(
+                    f,
+                    &grid,
+                    object,
+                    world_from_object,
+                    sp.point,
+                    sp.normal,
+                    search,
+                )
+                .ok_or_else(|| {
+                    GeltipError::input(
+                        format!("object {}", object.name()),
+                        format!(
+                            "brought along the normal at {} it never touches the finger (searched {:.1} mm in)",
+                            place.label(),
+                            -search.0
+                        ),
+                    )
+                })?;
+                // A top point on the normal touches at offset 0 exactly: the classic bound
+                // on how deep the object reaches holds; otherwise trace the whole shell.
+                let plain = touch.offset_mm == 0.0 && tilt_deg == 0.0;
+                let trace_depth_mm = if plain {
+                    contact::max_trace_depth(f, depth_mm)
+                } else {
+                    contact::max_trace_depth(f, f64::INFINITY)
+                };
+                check_reach(trace_depth_mm)?;
+                let push = depth_mm - touch.offset_mm;
+                Ok(ContactPose {
+                    point: sp.point,
+                    normal: sp.normal,
+                    coord,
+                    region: sp.region,
+                    world_from_object,
+                    origin: sp.point - push * sp.normal,
+                    depth_mm,
+                    first_touch_offset_mm: touch.offset_mm,
+                    first_touch: touch.band.iter().map(|&c| f.point_at(c).point).collect(),
+                    trace_depth_mm,
+                })
+            }
+            Hold::Pose {
+                world_from_object,
+                origin,
+            } => {
+                // Backing off along the object's own -z (its +z points at the finger).
+                let b = -(world_from_object * DVec3::Z).normalize();
+                // Anywhere along its axis: from beyond the finger's far side to its top.
+                let span = origin.length() + f.radius + f.cylinder_length + search.1;
+                let search = (-span, span);
+                let touch =
+                    contact::first_touch(f, &grid, object, world_from_object, origin, b, search);
+                let touch = match touch {
+                    Some(t) if t.offset_mm >= 0.0 => t,
+                    Some(t) => {
+                        return Err(GeltipError::input(
+                            "--pose",
+                            format!(
+                                "the object does not touch the finger: it is {:.3} mm short of touching along its +z axis",
+                                -t.offset_mm
+                            ),
+                        ))
+                    }
+                    None => {
+                        return Err(GeltipError::input(
+                            "--pose",
+                            "the object does not touch the finger, nor would it moving along its +z axis",
+                        ))
+                    }
+                };
+                let trace_depth_mm = contact::max_trace_depth(f, f64::INFINITY);
+                check_reach(trace_depth_mm)?;
+                let sp = f.point_at(touch.point);
+                Ok(ContactPose {
+                    point: sp.point,
+                    normal: sp.normal,
+                    coord: touch.point,
+                    region: sp.region,
+                    world_from_object,
+                    origin,
+                    depth_mm: touch.offset_mm,
+                    first_touch_offset_mm: 0.0,
+                    first_touch: touch.band.iter().map(|&c| f.point_at(c).point).collect(),
+                    trace_depth_mm,
+                })
+            }
+        }
     }
+}
+
+/// One contact of a scene file (`geltip render --scene`): the `render` flags' names.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneEntry {
+    object: String,
+    at: Option<String>,
+    #[serde(default)]
+    azimuth: f64,
+    #[serde(default)]
+    spin: f64,
+    #[serde(default)]
+    tilt: f64,
+    #[serde(default)]
+    tilt_towards: f64,
+    depth: Option<f64>,
+    /// 16 numbers (row-major 4x4) or 7 (x y z qw qx qy qz), instead of at/depth.
+    pose: Option<Vec<f64>>,
+}
+
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    contacts: Vec<SceneEntry>,
+}
+
+/// Reads a scene: a JSON (`.json`) or TOML file with a list `contacts`, each an `object`
+/// and either `at` + `depth` (with optional `azimuth`, `spin`, `tilt`, `tilt_towards`) or a
+/// `pose`. The same object named twice is loaded once.
+pub fn load_scene(path: &std::path::Path) -> Result<Vec<Press>> {
+    let text = std::fs::read_to_string(path).map_err(|e| GeltipError::io(path, e))?;
+    let what = format!("scene {}", path.display());
+    let file: SceneFile = if path.extension().is_some_and(|e| e == "json") {
+        serde_json::from_str(&text).map_err(|e| GeltipError::input(&what, e.to_string()))?
+    } else {
+        toml::from_str(&text).map_err(|e| GeltipError::input(&what, e.message().to_string()))?
+    };
+    if file.contacts.is_empty() {
+        return Err(GeltipError::input(what, "lists no contacts"));
+    }
+    let mut objects: std::collections::HashMap<String, Arc<Object>> = Default::default();
+    let mut presses = Vec::with_capacity(file.contacts.len());
+    for (k, c) in file.contacts.into_iter().enumerate() {
+        let here = |reason: &str| {
+            GeltipError::input(format!("{what}: contact {}", k + 1), reason.to_string())
+        };
+        let object = match objects.get(&c.object) {
+            Some(o) => o.clone(),
+            None => {
+                let o = Arc::new(Object::from_arg(&c.object)?);
+                objects.insert(c.object.clone(), o.clone());
+                o
+            }
+        };
+        let hold = match (c.pose, c.at, c.depth) {
+            (Some(pose), None, None) => {
+                let text: Vec<String> = pose.iter().map(|v| v.to_string()).collect();
+                parse_pose(&text.join(","))?
+            }
+            (None, Some(at), Some(depth)) => Hold::Surface {
+                place: Place::parse(&at)?,
+                azimuth_deg: c.azimuth,
+                spin_deg: c.spin,
+                tilt_deg: c.tilt,
+                tilt_towards_deg: c.tilt_towards,
+                depth_mm: depth,
+            },
+            (Some(_), _, _) => return Err(here("give either a pose or at and depth, not both")),
+            _ => return Err(here("needs at and depth (or a pose)")),
+        };
+        presses.push(Press { object, hold });
+    }
+    Ok(presses)
 }
 
 /// Ground truth of one rendered contact.
@@ -209,14 +546,44 @@ pub struct GroundTruth {
     /// How far the skin is pushed in at the contact point itself (mm): the press depth for
     /// a solid top, 0 in a tube's hole.
     pub contact_indentation_mm: f64,
+    /// The object's tilt away from the normal and its direction (degrees; 0 for a rigid pose).
+    pub tilt_deg: f64,
+    pub tilt_towards_deg: f64,
+    /// The object's pose: camera-frame point = M (object point, 1), M row-major.
+    pub pose: [f64; 16],
+    /// How far from its top's place on the normal the object first touched (mm, outward
+    /// positive; 0 for a top point on the normal, -1 for the torus at the tip).
+    pub first_touch_offset_mm: f64,
+    /// Surface points touched first (a ring's circle), the refined first point first.
+    pub first_touch: Vec<DVec3>,
+    /// The deepest penetration of the object into the undeformed skin (mm), and where.
+    pub indentation_reached_mm: f64,
+    pub deepest_point: Option<DVec3>,
+    /// Centroid of the indented area on the surface (weighted by indentation): **the label
+    /// detectors are scored against** (see [`GroundTruth::scoring_point`]).
+    pub contact_centre: Option<DVec3>,
+    /// Surface area of the indented region (mm²).
+    pub indented_area_mm2: f64,
 }
 
 /// Indentation (mm) above which a pixel belongs to the contact mask.
 pub const MASK_THRESHOLD_MM: f64 = 0.01;
 
 impl GroundTruth {
+    /// The point a contact detector should be scored against: the centre of the indented
+    /// region on the surface ([`GroundTruth::contact_centre`]), or the contact point when
+    /// nothing is indented. For a single-point top pressed along the normal of a smooth
+    /// finger it lies at the contact point up to the imprint's asymmetry.
+    pub fn scoring_point(&self) -> DVec3 {
+        self.contact_centre.unwrap_or(self.point)
+    }
+
     /// The labels file: one JSON object.
     pub fn to_json(&self) -> serde_json::Value {
+        let v = |p: &DVec3| p.to_array();
+        // A ring's first-touch band can hold hundreds of samples: at most 64, evenly spread.
+        let stride = self.first_touch.len().div_ceil(64).max(1);
+        let first_touch: Vec<[f64; 3]> = self.first_touch.iter().step_by(stride).map(v).collect();
         let (pixel, reason) = match &self.pixel {
             Ok(px) => (serde_json::json!([px.x, px.y]), serde_json::Value::Null),
             Err(why) => (serde_json::Value::Null, serde_json::json!(why)),
@@ -237,6 +604,17 @@ impl GroundTruth {
             "mask_bbox": self.mask_bbox,
             "over_pressed": self.over_pressed,
             "contact_indentation_mm": self.contact_indentation_mm,
+            "tilt_deg": self.tilt_deg,
+            "tilt_towards_deg": self.tilt_towards_deg,
+            "pose": self.pose,
+            "first_touch_offset_mm": self.first_touch_offset_mm,
+            "first_touch_point": self.first_touch.first().map(v),
+            "first_touch": first_touch,
+            "indentation_reached_mm": self.indentation_reached_mm,
+            "deepest_point": self.deepest_point.as_ref().map(v),
+            "contact_centre": self.contact_centre.as_ref().map(v),
+            "indented_area_mm2": self.indented_area_mm2,
+            "score_against": "contact_centre",
         })
     }
 }
@@ -261,6 +639,24 @@ impl Frame {
             .collect();
         image::RgbImage::from_raw(self.width, self.height, rgb)
             .expect("frame size matches its pixels")
+    }
+
+    /// Pixel count and bounding box of the contact mask inside `rect`.
+    pub fn mask_in(&self, rect: Rect) -> (u64, Option<[u32; 4]>) {
+        let mut count = 0;
+        let mut bbox: Option<[u32; 4]> = None;
+        for v in rect.y..(rect.y + rect.h).min(self.height) {
+            for u in rect.x..(rect.x + rect.w).min(self.width) {
+                if self.indentation[(v * self.width + u) as usize] as f64 > MASK_THRESHOLD_MM {
+                    count += 1;
+                    bbox = Some(match bbox {
+                        None => [u, v, u, v],
+                        Some([u0, v0, u1, v1]) => [u0.min(u), v0.min(v), u1.max(u), v1.max(v)],
+                    });
+                }
+            }
+        }
+        (count, bbox)
     }
 
     /// Pixel count and bounding box of the contact mask.
@@ -388,6 +784,46 @@ impl Rect {
             h: y1 - y0,
         }
     }
+
+    /// The part of `self` outside `other`, as up to four disjoint rectangles.
+    pub fn minus(self, other: Rect) -> Vec<Rect> {
+        let (ax1, ay1) = (self.x + self.w, self.y + self.h);
+        let (bx1, by1) = (other.x + other.w, other.y + other.h);
+        let (ix0, iy0) = (self.x.max(other.x), self.y.max(other.y));
+        let (ix1, iy1) = (ax1.min(bx1), ay1.min(by1));
+        if ix0 >= ix1 || iy0 >= iy1 {
+            return vec![self];
+        }
+        let mut out = Vec::new();
+        let mut push = |x0: u32, y0: u32, x1: u32, y1: u32| {
+            if x1 > x0 && y1 > y0 {
+                out.push(Rect {
+                    x: x0,
+                    y: y0,
+                    w: x1 - x0,
+                    h: y1 - y0,
+                });
+            }
+        };
+        push(self.x, self.y, ax1, iy0); // above
+        push(self.x, iy1, ax1, ay1); // below
+        push(self.x, iy0, ix0, iy1); // left
+        push(ix1, iy0, ax1, iy1); // right
+        out
+    }
+
+    /// The union of `rects` as disjoint rectangles (each cell covered once).
+    pub fn disjoint(rects: impl IntoIterator<Item = Rect>) -> Vec<Rect> {
+        let mut out: Vec<Rect> = Vec::new();
+        for r in rects {
+            let mut pieces = vec![r];
+            for q in &out {
+                pieces = pieces.into_iter().flat_map(|p| p.minus(*q)).collect();
+            }
+            out.extend(pieces);
+        }
+        out
+    }
 }
 
 #[cfg(test)]
@@ -406,6 +842,56 @@ mod tests {
             rgba: vec![0; (width * height * 4) as usize],
             indentation,
         }
+    }
+
+    #[test]
+    fn disjoint_rects_cover_the_union_once() {
+        let rects = [
+            Rect {
+                x: 0,
+                y: 0,
+                w: 10,
+                h: 8,
+            },
+            Rect {
+                x: 5,
+                y: 4,
+                w: 10,
+                h: 10,
+            },
+            Rect {
+                x: 30,
+                y: 30,
+                w: 3,
+                h: 3,
+            },
+            Rect {
+                x: 2,
+                y: 2,
+                w: 3,
+                h: 3,
+            },
+        ];
+        let pieces = Rect::disjoint(rects);
+        let mut cover = vec![0u32; 40 * 40];
+        for p in &pieces {
+            for y in p.y..p.y + p.h {
+                for x in p.x..p.x + p.w {
+                    cover[y as usize * 40 + x as usize] += 1;
+                }
+            }
+        }
+        for y in 0..40u32 {
+            for x in 0..40u32 {
+                let inside = rects
+                    .iter()
+                    .any(|r| (r.x..r.x + r.w).contains(&x) && (r.y..r.y + r.h).contains(&y));
+                assert_eq!(cover[(y * 40 + x) as usize], inside as u32, "cell {x},{y}");
+            }
+        }
+        let area: u64 = pieces.iter().map(|p| p.area()).sum();
+        // The second overlaps the first by 5 x 4; the fourth lies inside the first.
+        assert_eq!(area, 80 + 100 - 20 + 9);
     }
 
     #[test]
