@@ -17,7 +17,9 @@ fn geltip() -> Command {
 
 /// A fresh empty directory for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("dataset").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("dataset")
+        .join(name);
     let _ = fs::remove_dir_all(&dir);
     fs::create_dir_all(&dir).unwrap();
     dir
@@ -28,7 +30,13 @@ fn run(args: &[&str]) -> Output {
 }
 
 fn dataset(out: &Path, extra: &[&str]) -> Value {
-    let mut args = vec!["dataset", "--sensor", "paper", "--out", out.to_str().unwrap()];
+    let mut args = vec![
+        "dataset",
+        "--sensor",
+        "paper",
+        "--out",
+        out.to_str().unwrap(),
+    ];
     args.extend_from_slice(extra);
     let o = run(&args);
     assert!(
@@ -75,7 +83,10 @@ fn labels(dir: &Path) -> Vec<Value> {
 /// The set is complete: `n` labels sorted by index, each file present, no temporary file.
 fn assert_complete(dir: &Path, n: u64) {
     let labels = labels(dir);
-    let indices: Vec<u64> = labels.iter().map(|l| l["index"].as_u64().unwrap()).collect();
+    let indices: Vec<u64> = labels
+        .iter()
+        .map(|l| l["index"].as_u64().unwrap())
+        .collect();
     assert_eq!(indices, (0..n).collect::<Vec<_>>());
     for l in &labels {
         for key in ["image", "depth", "mask"] {
@@ -140,7 +151,12 @@ fn same_seed_gives_identical_files_and_pixels_lie_in_masks() {
             .to_luma8();
         let (u, v) = (px[0].as_f64().unwrap(), px[1].as_f64().unwrap());
         let (u, v) = (u.round() as u32, v.round() as u32);
-        assert_eq!(mask.get_pixel(u, v).0[0], 255, "sample {}: pixel ({u}, {v}) outside its mask", l["index"]);
+        assert_eq!(
+            mask.get_pixel(u, v).0[0],
+            255,
+            "sample {}: pixel ({u}, {v}) outside its mask",
+            l["index"]
+        );
         let count = mask.pixels().filter(|p| p.0[0] == 255).count() as u64;
         assert_eq!(count, l["mask_pixels"].as_u64().unwrap());
         checked += 1;
@@ -175,7 +191,10 @@ fn shards_merged_equal_the_unsharded_set() {
     let (fw, fm) = (files(&whole), files(&merged));
     assert_eq!(fw.keys().collect::<Vec<_>>(), fm.keys().collect::<Vec<_>>());
     for (k, v) in &fw {
-        assert!(fm[k] == *v, "{k} differs between the merged and the unsharded set");
+        assert!(
+            fm[k] == *v,
+            "{k} differs between the merged and the unsharded set"
+        );
     }
 
     // A missing shard is refused.
@@ -187,7 +206,10 @@ fn shards_merged_equal_the_unsharded_set() {
         shard_dirs[2].to_str().unwrap(),
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("missing shards 1/3"), "{err}");
+    assert!(
+        !o.status.success() && err.contains("missing shards 1/3"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -197,7 +219,9 @@ fn killed_run_resumes_to_a_complete_set() {
     let n = 40;
     let count = n.to_string();
     let mut child = geltip()
-        .args(["dataset", "--sensor", "paper", "--seed", "3", "--masks", "--count", &count])
+        .args([
+            "dataset", "--sensor", "paper", "--seed", "3", "--masks", "--count", &count,
+        ])
         .arg("--out")
         .arg(&out)
         .stdout(Stdio::null())
@@ -212,7 +236,10 @@ fn killed_run_resumes_to_a_complete_set() {
         if lines >= 1 {
             break;
         }
-        assert!(start.elapsed() < Duration::from_secs(120), "no sample landed");
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no sample landed"
+        );
         std::thread::sleep(Duration::from_millis(5));
     }
     child.kill().unwrap(); // SIGKILL
@@ -231,7 +258,10 @@ fn killed_run_resumes_to_a_complete_set() {
     // The resumed set equals one made in one go.
     let fresh = root.join("fresh");
     dataset(&fresh, &["--seed", "3", "--masks", "--count", &count]);
-    assert!(files(&out) == files(&fresh), "the resumed set differs from a fresh one");
+    assert!(
+        files(&out) == files(&fresh),
+        "the resumed set differs from a fresh one"
+    );
 }
 
 #[test]
@@ -276,7 +306,10 @@ fn bad_input_gives_one_line_errors() {
     };
     assert!(with(&["--count", "0"]).contains("--count: must be at least 1"));
     let e = with(&["--count", "5", "--shard", "3/3"]);
-    assert!(e.contains("--shard 3/3") && e.contains("below the shard count"), "{e}");
+    assert!(
+        e.contains("--shard 3/3") && e.contains("below the shard count"),
+        "{e}"
+    );
     let e = with(&["--count", "5", "--shard", "1/0"]);
     assert!(e.contains("--shard 1/0") && e.contains("at least 1"), "{e}");
     let e = with(&["--count", "5", "--objects", "sphere,teapot"]);
@@ -289,7 +322,13 @@ fn bad_input_gives_one_line_errors() {
     fs::write(&file, b"x").unwrap();
     let under = file.join("set");
     let e = error_of(&[
-        "dataset", "--sensor", "paper", "--count", "2", "--out", under.to_str().unwrap(),
+        "dataset",
+        "--sensor",
+        "paper",
+        "--count",
+        "2",
+        "--out",
+        under.to_str().unwrap(),
     ]);
     assert!(e.contains("a-file/set"), "{e}");
 
@@ -297,8 +336,14 @@ fn bad_input_gives_one_line_errors() {
     let bg = root.join("bg.png");
     image::RgbImage::new(10, 10).save(&bg).unwrap();
     let e = with(&["--count", "2", "--background", bg.to_str().unwrap()]);
-    assert!(e.contains("bg.png") && e.contains("10x10") && e.contains("640x480"), "{e}");
-    assert!(!out.join("dataset.json").exists(), "a refused run wrote its manifest");
+    assert!(
+        e.contains("bg.png") && e.contains("10x10") && e.contains("640x480"),
+        "{e}"
+    );
+    assert!(
+        !out.join("dataset.json").exists(),
+        "a refused run wrote its manifest"
+    );
 
     // A rerun with other options into the same directory.
     dataset(&out, &["--count", "1", "--seed", "4"]);
@@ -309,4 +354,35 @@ fn bad_input_gives_one_line_errors() {
     // The same options resume (nothing to do).
     let report = dataset(&out, &["--count", "1", "--seed", "4"]);
     assert_eq!(report["rendered"], 0);
+}
+
+#[test]
+fn python_snippet_loads_a_set() {
+    let has_deps = Command::new("python3")
+        .args(["-c", "import numpy, PIL"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_deps {
+        eprintln!("skipped: python3 with numpy and Pillow not found (pip install numpy pillow)");
+        return;
+    }
+    let root = scratch("python");
+    let out = root.join("set");
+    dataset(
+        &out,
+        &["--count", "4", "--seed", "5", "--masks", "--depth-maps"],
+    );
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/load_dataset.py");
+    let o = Command::new("python3")
+        .arg(&script)
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("4 samples of 640x480"), "{stdout}");
 }
