@@ -64,8 +64,25 @@ fn main() -> anyhow::Result<()> {
         sensor.height,
         dataset::default_workers()
     );
-    println!("| run                                | samples | samples/s | prep ms | render ms | readback ms | post ms | enc ms | write ms | KB/sample |");
-    println!("|------------------------------------|--------|-----------|---------|---------|----------|--------|---------|--------|---------|");
+    println!(
+        "| {:<34} | {:>6} | {:>9} | {:>7} | {:>7} | {:>8} | {:>6} | {:>7} | {:>6} | {:>7} |",
+        "run",
+        "samples",
+        "samples/s",
+        "prep ms",
+        "render ms",
+        "readback ms",
+        "post ms",
+        "enc ms",
+        "write ms",
+        "KB/sample"
+    );
+    println!(
+        "|{}|",
+        [36, 8, 11, 9, 9, 10, 8, 9, 8, 9]
+            .map(|w| "-".repeat(w))
+            .join("|")
+    );
     let tmp = std::env::temp_dir().join(format!("geltip-bench-dataset-{}", std::process::id()));
     let rows: [(&str, bool, usize, PngLevel); 5] = [
         ("PNG (fast)", false, 0, PngLevel::Fast),
