@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::localise::{load_frame, localise, Method};
 use geltip::object::{Object, Solid};
@@ -12,6 +13,7 @@ use geltip::sensor::{Sensor, PRESETS};
 use glam::{DVec2, DVec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -148,6 +150,63 @@ enum Command {
         #[arg(long, default_value_t = 0.0)]
         azimuth: f64,
     },
+    /// Render a labelled synthetic dataset: random contacts anywhere the lens can see, drawn
+    /// from (seed, sample index) alone; resumable, shardable.
+    ///
+    /// Examples:
+    ///   geltip dataset --sensor paper --count 10000 --seed 1 --out data/train
+    ///   geltip dataset --sensor paper --count 10000 --seed 1 --shard 0/4 --out data/s0
+    ///   geltip dataset --merge data/train data/s0 data/s1 data/s2 data/s3
+    #[command(verbatim_doc_comment)]
+    Dataset {
+        /// Preset name or path to a sensor TOML file.
+        #[arg(long, required_unless_present = "merge")]
+        sensor: Option<String>,
+        /// Samples in the whole set (all shards).
+        #[arg(long, required_unless_present = "merge")]
+        count: Option<u64>,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Directory of the set (or of this shard).
+        #[arg(long, required_unless_present = "merge", conflicts_with = "merge")]
+        out: Option<PathBuf>,
+        /// Comma-separated built-in solids and/or mesh files (default: the seven solids).
+        #[arg(long, value_delimiter = ',')]
+        objects: Vec<String>,
+        /// Press depths, mm, as min..max (default: 0.2 to the gel's thickness).
+        #[arg(long = "depth-range")]
+        depth_range: Option<String>,
+        /// Render shard i of n (a contiguous block of indices) into --out.
+        #[arg(long)]
+        shard: Option<String>,
+        /// Also write depth/<k>.npy: the indentation (mm) each pixel sees.
+        #[arg(long = "depth-maps")]
+        depth_maps: bool,
+        /// Also write masks/<k>.png: 255 where the skin is pressed in.
+        #[arg(long)]
+        masks: bool,
+        /// Sensor noise, std in 8-bit grey levels (default: the sensor's).
+        #[arg(long)]
+        noise: Option<f64>,
+        /// Per-sample gain of each colour channel drawn from 1 ± this.
+        #[arg(long = "light-jitter", default_value_t = 0.0)]
+        light_jitter: f64,
+        /// Per-sample gain of the tactile change drawn from 1 ± this.
+        #[arg(long = "paint-jitter", default_value_t = 0.0)]
+        paint_jitter: f64,
+        /// A real sensor's empty frame (same size): images are it plus the rendered change.
+        #[arg(long)]
+        background: Option<PathBuf>,
+        /// PNG compression: none, fast, default, best.
+        #[arg(long, default_value = "fast")]
+        png: String,
+        /// Encoder threads (default: the cores available).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Join shard directories into OUT: --merge OUT SHARD_DIR...
+        #[arg(long, num_args = 2.., value_name = "DIR")]
+        merge: Vec<PathBuf>,
+    },
     /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
     Objects {
         /// Directory to write into.
@@ -162,6 +221,33 @@ fn write_frame(frame: &Frame, png: &PathBuf, depth_map: Option<&PathBuf>) -> Res
         output::write_npy_f32(path, frame.width, frame.height, &frame.indentation)?;
     }
     Ok(())
+}
+
+/// A progress callback for long jobs: a bar with rate and ETA on a terminal, a plain line
+/// every few seconds otherwise (logs, batch jobs).
+fn progress_reporter(unit: &'static str) -> Result<impl FnMut(dataset::Progress)> {
+    let terminal = std::io::stderr().is_terminal();
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template(&format!(
+            "{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} {{per_sec}} ETA {{eta}}"
+        ))?
+        .progress_chars("=> "),
+    );
+    let start = std::time::Instant::now();
+    let mut last_line = start;
+    Ok(move |p: dataset::Progress| {
+        if terminal {
+            bar.set_length(p.total);
+            bar.set_position(p.done);
+            if p.done == p.total && p.total > 0 {
+                bar.finish_and_clear();
+            }
+        } else if last_line.elapsed().as_secs() >= 5 || (p.done == p.total && p.total > 0) {
+            last_line = std::time::Instant::now();
+            let rate = p.done as f64 / start.elapsed().as_secs_f64().max(1e-9);
+            eprintln!("{}/{} {unit} ({rate:.1}/s)", p.done, p.total);
+        }
+    })
 }
 
 fn main() {
@@ -314,6 +400,67 @@ fn run(cli: Cli) -> Result<()> {
             println!(
                 "Wrote {}: images/, labels/, taps.csv, tables.md, errors_per_position.svg",
                 out.display()
+            );
+        }
+        Command::Dataset {
+            sensor,
+            count,
+            seed,
+            out,
+            objects,
+            depth_range,
+            shard,
+            depth_maps,
+            masks,
+            noise,
+            light_jitter,
+            paint_jitter,
+            background,
+            png,
+            jobs,
+            merge,
+        } => {
+            let command: Vec<String> = std::env::args().collect();
+            if let Some((out, shards)) = merge.split_first() {
+                let n = dataset::merge(out, shards, &command)?;
+                println!("{}", json!({ "merged": out, "samples": n }));
+                return Ok(());
+            }
+            let (sensor_arg, count, out) = (
+                sensor.context("--sensor is required")?,
+                count.context("--count is required")?,
+                out.context("--out is required")?,
+            );
+            let sensor = Sensor::load(&sensor_arg)?;
+            let mut spec = dataset::Spec::new(&sensor_arg, sensor, count, seed);
+            if !objects.is_empty() {
+                spec.objects = objects;
+            }
+            if let Some(r) = depth_range {
+                spec.depth_range = dataset::parse_depth_range(&r)?;
+            }
+            if let Some(s) = shard {
+                spec.shard = dataset::Shard::parse(&s)?;
+            }
+            spec.depth_maps = depth_maps;
+            spec.masks = masks;
+            spec.noise = noise.unwrap_or(spec.sensor.config.render.noise);
+            spec.light_jitter = light_jitter;
+            spec.paint_jitter = paint_jitter;
+            spec.background = background;
+            spec.png = dataset::PngLevel::from_name(&png)?;
+            spec.workers = jobs.unwrap_or(spec.workers);
+            spec.command = command;
+            let report = dataset::run(&spec, Some(&out), progress_reporter("samples")?)?;
+            println!(
+                "{}",
+                json!({
+                    "out": out,
+                    "samples": report.shard_samples,
+                    "kept": report.kept,
+                    "rendered": report.rendered,
+                    "samples_per_s": report.rendered as f64 / report.wall.as_secs_f64().max(1e-9),
+                })
             );
         }
         Command::Objects { out } => {

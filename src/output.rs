@@ -101,6 +101,107 @@ fn write_png(
     write_atomic(path, &png)
 }
 
+/// Pixel layouts [`png_bytes`] encodes: 8 bits per channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PngColor {
+    Gray8,
+    Rgb8,
+    Rgba8,
+}
+
+impl PngColor {
+    fn channels(self) -> usize {
+        match self {
+            PngColor::Gray8 => 1,
+            PngColor::Rgb8 => 3,
+            PngColor::Rgba8 => 4,
+        }
+    }
+}
+
+/// Encodes an 8-bit image (`width * height` pixels of `color`, rows top to bottom) as PNG
+/// bytes in memory, with the given zlib effort and row filter (speed against size).
+pub fn png_bytes(
+    width: u32,
+    height: u32,
+    data: &[u8],
+    color: PngColor,
+    compression: image::codecs::png::CompressionType,
+    filter: image::codecs::png::FilterType,
+) -> Result<Vec<u8>> {
+    check_len("png", width, height, color.channels(), data.len())?;
+    let ext = match color {
+        PngColor::Gray8 => image::ExtendedColorType::L8,
+        PngColor::Rgb8 => image::ExtendedColorType::Rgb8,
+        PngColor::Rgba8 => image::ExtendedColorType::Rgba8,
+    };
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new_with_quality(&mut png, compression, filter),
+        data,
+        width,
+        height,
+        ext,
+    )
+    .map_err(|e| GeltipError::input("png", e.to_string()))?;
+    Ok(png)
+}
+
+/// Makes `dst` hold the bytes of `src` atomically: a hard link under a temporary name (no
+/// copy when both are on one file system), else a copy through [`write_atomic`].
+pub fn link_or_copy_atomic(src: impl AsRef<Path>, dst: impl AsRef<Path>) -> Result<()> {
+    let (src, dst) = (src.as_ref(), dst.as_ref());
+    let dir = match dst.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    fs::create_dir_all(&dir).map_err(|e| GeltipError::io(dst, e))?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(dst.file_name().unwrap_or_default());
+    tmp_name.push(format!(".{}.link.tmp", std::process::id()));
+    let tmp = dir.join(tmp_name);
+    let _ = fs::remove_file(&tmp);
+    if fs::hard_link(src, &tmp).is_ok() {
+        return fs::rename(&tmp, dst).map_err(|e| {
+            let _ = fs::remove_file(&tmp);
+            GeltipError::io(dst, e)
+        });
+    }
+    let bytes = fs::read(src).map_err(|e| GeltipError::io(src, e))?;
+    write_atomic(dst, &bytes)
+}
+
+/// A text file that grows by whole lines (a manifest): each line goes to the file in one
+/// write, after whatever it describes is complete. A crash can leave at most the last line
+/// torn, which readers must ignore (see the dataset job's resume).
+pub struct LineLog {
+    path: PathBuf,
+    file: fs::File,
+}
+
+impl LineLog {
+    /// Opens `path` for appending, creating it.
+    pub fn open(path: impl AsRef<Path>) -> Result<LineLog> {
+        let path = path.as_ref().to_path_buf();
+        let file = fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .map_err(|e| GeltipError::io(&path, e))?;
+        Ok(LineLog { path, file })
+    }
+
+    /// Appends `line` (which must not contain a newline) and a newline, in one write.
+    pub fn append(&mut self, line: &str) -> Result<()> {
+        let mut buf = Vec::with_capacity(line.len() + 1);
+        buf.extend_from_slice(line.as_bytes());
+        buf.push(b'\n');
+        self.file
+            .write_all(&buf)
+            .map_err(|e| GeltipError::io(&self.path, e))
+    }
+}
+
 fn check_len(what: &str, width: u32, height: u32, channels: usize, len: usize) -> Result<()> {
     if width == 0 || height == 0 {
         return Err(GeltipError::input(

@@ -1,0 +1,388 @@
+//! `geltip dataset` end to end, through the built binary: determinism, shards and merge,
+//! resume after SIGKILL and after a torn manifest line, labels against masks, and the
+//! one-line errors.
+
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn geltip() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_geltip"));
+    c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    c
+}
+
+/// A fresh empty directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("dataset")
+        .join(name);
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(args: &[&str]) -> Output {
+    geltip().args(args).output().unwrap()
+}
+
+fn dataset(out: &Path, extra: &[&str]) -> Value {
+    let mut args = vec![
+        "dataset",
+        "--sensor",
+        "paper",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    assert!(
+        o.status.success(),
+        "geltip {args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// Every file of a set by relative path, with `dataset.json`'s command line (which names the
+/// directory) removed.
+fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+            let mut bytes = fs::read(&p).unwrap();
+            if rel == "dataset.json" {
+                let mut v: Value = serde_json::from_slice(&bytes).unwrap();
+                v.as_object_mut().unwrap().remove("command");
+                bytes = serde_json::to_vec(&v).unwrap();
+            }
+            out.insert(rel, bytes);
+        }
+    }
+    out
+}
+
+fn labels(dir: &Path) -> Vec<Value> {
+    fs::read_to_string(dir.join("labels.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// The set is complete: `n` labels sorted by index, each file present, no temporary file.
+fn assert_complete(dir: &Path, n: u64) {
+    let labels = labels(dir);
+    let indices: Vec<u64> = labels
+        .iter()
+        .map(|l| l["index"].as_u64().unwrap())
+        .collect();
+    assert_eq!(indices, (0..n).collect::<Vec<_>>());
+    for l in &labels {
+        for key in ["image", "depth", "mask"] {
+            if let Some(rel) = l[key].as_str() {
+                assert!(dir.join(rel).is_file(), "{rel} missing");
+            }
+        }
+    }
+    let leftovers: Vec<String> = files(dir)
+        .into_keys()
+        .filter(|p| p.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+    let images = fs::read_dir(dir.join("images")).unwrap().count() as u64;
+    assert_eq!(images, n);
+}
+
+const OPTS: [&str; 12] = [
+    "--count",
+    "9",
+    "--seed",
+    "7",
+    "--masks",
+    "--depth-maps",
+    "--noise",
+    "2",
+    "--light-jitter",
+    "0.1",
+    "--paint-jitter",
+    "0.2",
+];
+
+#[test]
+fn same_seed_gives_identical_files_and_pixels_lie_in_masks() {
+    let root = scratch("same_seed");
+    let (a, b, c) = (root.join("a"), root.join("b"), root.join("c"));
+    dataset(&a, &OPTS);
+    dataset(&b, &OPTS);
+    assert_complete(&a, 9);
+    let fa = files(&a);
+    assert_eq!(fa.len(), 1 + 1 + 3 * 9);
+    assert!(fa == files(&b), "two runs with the same seed differ");
+
+    // Another seed gives other samples.
+    let mut other = OPTS;
+    other[3] = "8";
+    dataset(&c, &other);
+    assert_ne!(fa["images/000000.png"], files(&c)["images/000000.png"]);
+
+    // Each contact's pixel lies in its mask (where the skin is pressed at the contact point:
+    // a tube's hole is not).
+    let mut checked = 0;
+    for l in labels(&a) {
+        let Some(px) = l["pixel"].as_array() else {
+            continue;
+        };
+        if l["contact_indentation_mm"].as_f64().unwrap() <= 0.05 {
+            continue;
+        }
+        let mask = image::open(a.join(l["mask"].as_str().unwrap()))
+            .unwrap()
+            .to_luma8();
+        let (u, v) = (px[0].as_f64().unwrap(), px[1].as_f64().unwrap());
+        let (u, v) = (u.round() as u32, v.round() as u32);
+        assert_eq!(
+            mask.get_pixel(u, v).0[0],
+            255,
+            "sample {}: pixel ({u}, {v}) outside its mask",
+            l["index"]
+        );
+        let count = mask.pixels().filter(|p| p.0[0] == 255).count() as u64;
+        assert_eq!(count, l["mask_pixels"].as_u64().unwrap());
+        checked += 1;
+    }
+    assert!(checked >= 5, "only {checked} labels checked");
+}
+
+#[test]
+fn shards_merged_equal_the_unsharded_set() {
+    let root = scratch("shards");
+    let whole = root.join("whole");
+    dataset(&whole, &OPTS);
+    let mut shard_dirs = Vec::new();
+    for i in 0..3 {
+        let dir = root.join(format!("s{i}"));
+        let mut args = OPTS.to_vec();
+        let shard = format!("{i}/3");
+        args.extend(["--shard", &shard]);
+        dataset(&dir, &args);
+        assert_eq!(labels(&dir).len(), 3);
+        shard_dirs.push(dir);
+    }
+    let merged = root.join("merged");
+    let mut args = vec!["dataset", "--merge", merged.to_str().unwrap()];
+    // Any order of shards.
+    for d in shard_dirs.iter().rev() {
+        args.push(d.to_str().unwrap());
+    }
+    let o = run(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_complete(&merged, 9);
+    let (fw, fm) = (files(&whole), files(&merged));
+    assert_eq!(fw.keys().collect::<Vec<_>>(), fm.keys().collect::<Vec<_>>());
+    for (k, v) in &fw {
+        assert!(
+            fm[k] == *v,
+            "{k} differs between the merged and the unsharded set"
+        );
+    }
+
+    // A missing shard is refused.
+    let o = run(&[
+        "dataset",
+        "--merge",
+        root.join("m2").to_str().unwrap(),
+        shard_dirs[0].to_str().unwrap(),
+        shard_dirs[2].to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("missing shards 1/3"),
+        "{err}"
+    );
+}
+
+#[test]
+fn killed_run_resumes_to_a_complete_set() {
+    let root = scratch("killed");
+    let out = root.join("set");
+    let n = 40;
+    let count = n.to_string();
+    let mut child = geltip()
+        .args([
+            "dataset", "--sensor", "paper", "--seed", "3", "--masks", "--count", &count,
+        ])
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        let lines = fs::read_to_string(out.join("labels.jsonl"))
+            .map(|t| t.lines().count())
+            .unwrap_or(0);
+        if lines >= 1 {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no sample landed"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let before = labels(&out).len();
+    assert!(before < n, "the run finished before it was killed");
+
+    let report = dataset(&out, &["--seed", "3", "--masks", "--count", &count]);
+    assert!(report["kept"].as_u64().unwrap() >= 1);
+    assert_eq!(
+        report["kept"].as_u64().unwrap() + report["rendered"].as_u64().unwrap(),
+        n as u64
+    );
+    assert_complete(&out, n as u64);
+
+    // The resumed set equals one made in one go.
+    let fresh = root.join("fresh");
+    dataset(&fresh, &["--seed", "3", "--masks", "--count", &count]);
+    assert!(
+        files(&out) == files(&fresh),
+        "the resumed set differs from a fresh one"
+    );
+}
+
+#[test]
+fn torn_line_and_missing_file_are_redone() {
+    let root = scratch("torn");
+    let out = root.join("set");
+    let args = ["--count", "6", "--seed", "2"];
+    dataset(&out, &args);
+    let before = files(&out);
+    // A line torn by a crash, a sample whose image is gone, a stale temporary file.
+    let mut text = fs::read_to_string(out.join("labels.jsonl")).unwrap();
+    text.push_str("{\"index\": 9, \"ima");
+    fs::write(out.join("labels.jsonl"), text).unwrap();
+    fs::remove_file(out.join("images/000004.png")).unwrap();
+    fs::write(out.join("images/.000005.png.1.0.tmp"), b"half").unwrap();
+    let report = dataset(&out, &args);
+    assert_eq!(report["kept"], 5);
+    assert_eq!(report["rendered"], 1);
+    assert_complete(&out, 6);
+    assert!(files(&out) == before);
+}
+
+/// Runs geltip expecting failure; returns its one-line error.
+fn error_of(args: &[&str]) -> String {
+    let o = run(args);
+    assert!(!o.status.success(), "geltip {args:?} succeeded");
+    let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
+    assert_eq!(err.lines().count(), 1, "not one line: {err}");
+    err
+}
+
+#[test]
+fn bad_input_gives_one_line_errors() {
+    let root = scratch("errors");
+    let out = root.join("set");
+    let o = out.to_str().unwrap();
+    let base = ["dataset", "--sensor", "paper", "--out", o];
+    let with = |extra: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        error_of(&a)
+    };
+    assert!(with(&["--count", "0"]).contains("--count: must be at least 1"));
+    let e = with(&["--count", "5", "--shard", "3/3"]);
+    assert!(
+        e.contains("--shard 3/3") && e.contains("below the shard count"),
+        "{e}"
+    );
+    let e = with(&["--count", "5", "--shard", "1/0"]);
+    assert!(e.contains("--shard 1/0") && e.contains("at least 1"), "{e}");
+    let e = with(&["--count", "5", "--objects", "sphere,teapot"]);
+    assert!(e.contains("object 'teapot'"), "{e}");
+    let e = with(&["--count", "5", "--depth-range", "2..1"]);
+    assert!(e.contains("--depth-range"), "{e}");
+
+    // A directory that cannot be made: under a regular file.
+    let file = root.join("a-file");
+    fs::write(&file, b"x").unwrap();
+    let under = file.join("set");
+    let e = error_of(&[
+        "dataset",
+        "--sensor",
+        "paper",
+        "--count",
+        "2",
+        "--out",
+        under.to_str().unwrap(),
+    ]);
+    assert!(e.contains("a-file/set"), "{e}");
+
+    // A background of the wrong size.
+    let bg = root.join("bg.png");
+    image::RgbImage::new(10, 10).save(&bg).unwrap();
+    let e = with(&["--count", "2", "--background", bg.to_str().unwrap()]);
+    assert!(
+        e.contains("bg.png") && e.contains("10x10") && e.contains("640x480"),
+        "{e}"
+    );
+    assert!(
+        !out.join("dataset.json").exists(),
+        "a refused run wrote its manifest"
+    );
+
+    // A rerun with other options into the same directory.
+    dataset(&out, &["--count", "1", "--seed", "4"]);
+    let e = with(&["--count", "2", "--seed", "4"]);
+    assert!(e.contains("different options (count)"), "{e}");
+    let e = with(&["--count", "1", "--seed", "4", "--masks"]);
+    assert!(e.contains("different options (masks)"), "{e}");
+    // The same options resume (nothing to do).
+    let report = dataset(&out, &["--count", "1", "--seed", "4"]);
+    assert_eq!(report["rendered"], 0);
+}
+
+#[test]
+fn python_snippet_loads_a_set() {
+    let has_deps = Command::new("python3")
+        .args(["-c", "import numpy, PIL"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_deps {
+        eprintln!("skipped: python3 with numpy and Pillow not found (pip install numpy pillow)");
+        return;
+    }
+    let root = scratch("python");
+    let out = root.join("set");
+    dataset(
+        &out,
+        &["--count", "4", "--seed", "5", "--masks", "--depth-maps"],
+    );
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/load_dataset.py");
+    let o = Command::new("python3")
+        .arg(&script)
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("4 samples of 640x480"), "{stdout}");
+}
