@@ -3,6 +3,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use geltip::jobs::experiment::{self, Protocol};
+use geltip::jobs::preview;
 use geltip::localise::{load_frame, localise, Method};
 use geltip::object::{Object, Solid};
 use geltip::output;
@@ -129,6 +130,27 @@ enum Command {
         /// Azimuth of the tapped side, degrees.
         #[arg(long, default_value_t = 0.0)]
         azimuth: f64,
+    },
+    /// Preview sensor designs before building them: what the camera sees, the resolution
+    /// down the finger, a picture per design, and a lens sweep.
+    ///
+    /// Example:
+    ///   geltip preview --sensors paper,webcam70,tube13,tube21 --out out/preview
+    #[command(verbatim_doc_comment)]
+    Preview {
+        /// Comma-separated presets or sensor TOML files.
+        #[arg(long, value_delimiter = ',', default_value = "paper,webcam70,tube13,tube21")]
+        sensors: Vec<String>,
+        /// Directory for the pictures, charts and table.
+        #[arg(long)]
+        out: PathBuf,
+        /// Lens sweep of the first design: equidistant fisheye fields of view <from>:<to>:<step>
+        /// in degrees ("none" to skip).
+        #[arg(long, default_value = "120:200:10")]
+        sweep_fov: String,
+        /// Skip the rendered pictures (geometry only, no GPU).
+        #[arg(long)]
+        no_pictures: bool,
     },
     /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
     Objects {
@@ -274,6 +296,30 @@ fn run(cli: Cli) -> Result<()> {
                 "Wrote {}: images/, labels/, taps.csv, tables.md, errors_per_position.svg",
                 out.display()
             );
+        }
+        Command::Preview {
+            sensors,
+            out,
+            sweep_fov,
+            no_pictures,
+        } => {
+            let designs = sensors
+                .iter()
+                .map(|s| Sensor::load(s.trim()))
+                .collect::<geltip::Result<Vec<_>>>()?;
+            let fovs = if sweep_fov == "none" {
+                vec![]
+            } else {
+                preview::parse_range(&sweep_fov)?
+            };
+            let report = preview::run(&designs, &fovs, Some(&out), !no_pictures, |name| {
+                eprintln!("previewed {name}");
+            })?;
+            println!("{}", preview::table_markdown(&report.designs));
+            if let Some((_, best)) = report.best_sweep() {
+                println!("Best lens of the sweep: {}", best.lens);
+            }
+            println!("Wrote {}: preview.md, preview.csv, resolution.svg, lens_sweep.svg, <design>.png", out.display());
         }
         Command::Objects { out } => {
             geltip::object::write_builtin_objects(&out)?;

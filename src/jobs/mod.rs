@@ -2,3 +2,6 @@
 //! API (never on each other's internals): [`experiment`] reproduces the paper's
 //! localisation experiment.
 pub mod experiment;
+pub mod preview;
+pub mod stability;
+pub mod tradeoff;
