@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use geltip::jobs::experiment::{self, Protocol};
-use geltip::jobs::preview;
+use geltip::jobs::{preview, stability, tradeoff};
 use geltip::localise::{load_frame, localise, Method};
 use geltip::object::{Object, Solid};
 use geltip::output;
@@ -152,6 +152,33 @@ enum Command {
         #[arg(long)]
         no_pictures: bool,
     },
+    /// Where the detectors fail: a sweep of contacts over everything the lens sees and press
+    /// depths up to the shell thickness, with and without sensor noise.
+    ///
+    /// Example:
+    ///   geltip stability --sensor paper --out out/stability
+    #[command(verbatim_doc_comment)]
+    Stability {
+        #[arg(long)]
+        sensor: String,
+        #[arg(long)]
+        out: PathBuf,
+        /// Detectors to test (comma separated): paper, surface.
+        #[arg(long, value_delimiter = ',', default_value = "paper,surface")]
+        method: Vec<String>,
+        /// Arc-length positions per azimuth, tip to lens edge (plus both sides of the junction).
+        #[arg(long, default_value_t = 3)]
+        positions: usize,
+        /// Azimuths round the finger.
+        #[arg(long, default_value_t = 2)]
+        azimuths: usize,
+        /// Press depths (mm, comma separated); default 0.01 .. the shell thickness.
+        #[arg(long, value_delimiter = ',')]
+        depths: Option<Vec<f64>>,
+        /// Sensor noise of the noisy pass (8-bit grey levels); 0 skips it.
+        #[arg(long, default_value_t = 2.0)]
+        noise: f64,
+    },
     /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
     Objects {
         /// Directory to write into.
@@ -166,6 +193,29 @@ fn write_frame(frame: &Frame, png: &PathBuf, depth_map: Option<&PathBuf>) -> Res
         output::write_npy_f32(path, frame.width, frame.height, &frame.indentation)?;
     }
     Ok(())
+}
+
+/// A progress bar on a terminal; plain periodic lines on stderr otherwise (indicatif hides
+/// itself when stderr is not a terminal, so those lines come from the caller's messages).
+fn progress_bar(unit: &str) -> Result<ProgressBar> {
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template(&format!(
+            "{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} {{msg}}"
+        ))?
+        .progress_chars("=> "),
+    );
+    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        let unit = unit.to_string();
+        let shown = bar.clone();
+        std::thread::spawn(move || loop {
+            std::thread::sleep(std::time::Duration::from_secs(5));
+            if shown.is_finished() {
+                break;
+            }
+            eprintln!("{}/{} {unit}", shown.position(), shown.length().unwrap_or(0));
+        });
+    }
+    Ok(bar)
 }
 
 fn main() {
@@ -320,6 +370,42 @@ fn run(cli: Cli) -> Result<()> {
                 println!("Best lens of the sweep: {}", best.lens);
             }
             println!("Wrote {}: preview.md, preview.csv, resolution.svg, lens_sweep.svg, <design>.png", out.display());
+        }
+        Command::Stability {
+            sensor,
+            out,
+            method,
+            positions,
+            azimuths,
+            depths,
+            noise,
+        } => {
+            let sensor = Sensor::load(&sensor)?;
+            let mut sweep = stability::Sweep::default_for(&sensor);
+            sweep.methods = method
+                .iter()
+                .map(|m| Method::from_name(m.trim()))
+                .collect::<geltip::Result<_>>()?;
+            sweep.positions = positions;
+            sweep.azimuths = azimuths;
+            if let Some(d) = depths {
+                sweep.depths = d;
+            }
+            if !(noise.is_finite() && noise >= 0.0) {
+                anyhow::bail!("--noise: must be a finite number >= 0, got {noise}");
+            }
+            sweep.noise = noise;
+            let bar = progress_bar("contacts")?;
+            let report = stability::run(&sensor, &sweep, Some(&out), |done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            })?;
+            bar.finish_and_clear();
+            println!("{}", report.markdown());
+            println!(
+                "Wrote {}: stability.md, stability.csv, detection_rate.svg, error_map.svg",
+                out.display()
+            );
         }
         Command::Objects { out } => {
             geltip::object::write_builtin_objects(&out)?;
