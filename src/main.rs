@@ -179,6 +179,25 @@ enum Command {
         #[arg(long, default_value_t = 2.0)]
         noise: f64,
     },
+    /// Speed against accuracy for the renderer's knobs (heightfield texels, ray steps, image
+    /// size, mesh SDF voxel size): frames/s, image error and localisation error, Pareto chart.
+    ///
+    /// Example:
+    ///   geltip tradeoff --sensor paper --out out/tradeoff
+    #[command(verbatim_doc_comment)]
+    Tradeoff {
+        #[arg(long)]
+        sensor: String,
+        #[arg(long)]
+        out: PathBuf,
+        /// Also every texels x steps pair (128..512 x 4..32), image scale 0.75, voxel 0.125 mm,
+        /// and all eight contacts instead of four.
+        #[arg(long)]
+        full: bool,
+        /// Speed rounds per configuration (the median is kept).
+        #[arg(long, default_value_t = 3)]
+        rounds: usize,
+    },
     /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
     Objects {
         /// Directory to write into.
@@ -404,6 +423,28 @@ fn run(cli: Cli) -> Result<()> {
             println!("{}", report.markdown());
             println!(
                 "Wrote {}: stability.md, stability.csv, detection_rate.svg, error_map.svg",
+                out.display()
+            );
+        }
+        Command::Tradeoff {
+            sensor,
+            out,
+            full,
+            rounds,
+        } => {
+            let sensor = Sensor::load(&sensor)?;
+            let configs = tradeoff::configurations(&sensor, full);
+            let bar = progress_bar("configurations")?;
+            bar.set_length(configs.len() as u64);
+            let contacts = tradeoff::contacts(full);
+            let report = tradeoff::run(&sensor, &configs, &contacts, rounds, Some(&out), |label| {
+                bar.set_message(label.to_string());
+                bar.inc(1);
+            })?;
+            bar.finish_and_clear();
+            println!("{}", report.markdown());
+            println!(
+                "Wrote {}: tradeoff.md, tradeoff.csv, tradeoff.svg",
                 out.display()
             );
         }
