@@ -15,7 +15,9 @@ fn main() -> anyhow::Result<()> {
     let reference = renderer.render_empty()?.to_rgb();
     // One contact per tap position of the paper, each with another of the seven solids.
     let contacts: Vec<_> = (0..experiment::POSITIONS.len())
-        .map(|i| experiment::taps(Solid::ALL[i % Solid::ALL.len()], &Protocol::default())[i].clone())
+        .map(|i| {
+            experiment::taps(Solid::ALL[i % Solid::ALL.len()], &Protocol::default())[i].clone()
+        })
         .collect();
     let mut frames: Vec<_> = renderer
         .render_batch(&contacts)?

@@ -139,7 +139,11 @@ enum Command {
     #[command(verbatim_doc_comment)]
     Preview {
         /// Comma-separated presets or sensor TOML files.
-        #[arg(long, value_delimiter = ',', default_value = "paper,webcam70,tube13,tube21")]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "paper,webcam70,tube13,tube21"
+        )]
         sensors: Vec<String>,
         /// Directory for the pictures, charts and table.
         #[arg(long)]
@@ -231,7 +235,11 @@ fn progress_bar(unit: &str) -> Result<ProgressBar> {
             if shown.is_finished() {
                 break;
             }
-            eprintln!("{}/{} {unit}", shown.position(), shown.length().unwrap_or(0));
+            eprintln!(
+                "{}/{} {unit}",
+                shown.position(),
+                shown.length().unwrap_or(0)
+            );
         });
     }
     Ok(bar)
@@ -388,7 +396,10 @@ fn run(cli: Cli) -> Result<()> {
             if let Some((_, best)) = report.best_sweep() {
                 println!("Best lens of the sweep: {}", best.lens);
             }
-            println!("Wrote {}: preview.md, preview.csv, resolution.svg, lens_sweep.svg, <design>.png", out.display());
+            println!(
+                "Wrote {}: preview.md, preview.csv, resolution.svg, lens_sweep.svg, <design>.png",
+                out.display()
+            );
         }
         Command::Stability {
             sensor,
@@ -437,10 +448,11 @@ fn run(cli: Cli) -> Result<()> {
             let bar = progress_bar("configurations")?;
             bar.set_length(configs.len() as u64);
             let contacts = tradeoff::contacts(full);
-            let report = tradeoff::run(&sensor, &configs, &contacts, rounds, Some(&out), |label| {
-                bar.set_message(label.to_string());
-                bar.inc(1);
-            })?;
+            let report =
+                tradeoff::run(&sensor, &configs, &contacts, rounds, Some(&out), |label| {
+                    bar.set_message(label.to_string());
+                    bar.inc(1);
+                })?;
             bar.finish_and_clear();
             println!("{}", report.markdown());
             println!(

@@ -57,7 +57,11 @@ pub fn heat(t: f64) -> RGBColor {
         (0.66, (240.0, 200.0, 30.0)),
         (1.0, (214.0, 39.0, 40.0)),
     ];
-    let k = stops.iter().rposition(|s| s.0 <= t).unwrap_or(0).min(stops.len() - 2);
+    let k = stops
+        .iter()
+        .rposition(|s| s.0 <= t)
+        .unwrap_or(0)
+        .min(stops.len() - 2);
     let (t0, a) = stops[k];
     let (t1, b) = stops[k + 1];
     let w = (t - t0) / (t1 - t0);

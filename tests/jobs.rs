@@ -38,7 +38,11 @@ fn pinhole_sees_down_to_r_over_tan_half_fov() {
         let z_min = r / (0.5 * fov.to_radians()).tan();
         let p = preview::analyse(&s).unwrap();
         // All round: the lens is round and the image does not crop.
-        assert!((p.lowest_z - z_min).abs() < 1e-6, "fov {fov}: {} vs {z_min}", p.lowest_z);
+        assert!(
+            (p.lowest_z - z_min).abs() < 1e-6,
+            "fov {fov}: {} vs {z_min}",
+            p.lowest_z
+        );
         assert!((p.lowest_z_all_round - z_min).abs() < 1e-6);
         let s_hand = FRAC_PI_2 * r + (d - z_min);
         assert!((p.visible_s_max - s_hand).abs() < 1e-6);
@@ -112,11 +116,20 @@ fn paper_comparisons_come_out() {
 
 #[test]
 fn bad_sweep_ranges_are_one_line_errors() {
-    for bad in ["120:200", "a:b:c", "200:120:10", "120:200:0", "0:100000:0.1"] {
+    for bad in [
+        "120:200",
+        "a:b:c",
+        "200:120:10",
+        "120:200:0",
+        "0:100000:0.1",
+    ] {
         let e = preview::parse_range(bad).unwrap_err().to_string();
         assert!(e.contains("--sweep-fov") && !e.contains('\n'), "{e}");
     }
-    assert_eq!(preview::parse_range("120:200:40").unwrap(), vec![120.0, 160.0, 200.0]);
+    assert_eq!(
+        preview::parse_range("120:200:40").unwrap(),
+        vec![120.0, 160.0, 200.0]
+    );
 }
 
 #[test]

@@ -145,7 +145,11 @@ pub fn px_per_mm(sensor: &Sensor, s: f64, phi: f64) -> Option<(f64, f64)> {
     let meridian = diff(down, up, H_MM)?;
     // Along the parallel: the ring's radius is the point's distance from the axis; at the
     // tip the ring shrinks to a point and the parallel resolution equals the meridian's.
-    let lateral = f.point_at(SurfaceCoord { s, phi }).point.truncate().length();
+    let lateral = f
+        .point_at(SurfaceCoord { s, phi })
+        .point
+        .truncate()
+        .length();
     let parallel = if lateral < 1e-6 {
         meridian
     } else {
@@ -263,7 +267,9 @@ pub fn parse_range(text: &str) -> Result<Vec<f64>> {
         .collect::<std::result::Result<_, _>>()
         .map_err(|_| bad("expected <from>:<to>:<step> in degrees, e.g. 120:200:20"))?;
     let [a, b, step] = parts[..] else {
-        return Err(bad("expected <from>:<to>:<step> in degrees, e.g. 120:200:20"));
+        return Err(bad(
+            "expected <from>:<to>:<step> in degrees, e.g. 120:200:20",
+        ));
     };
     if !(a.is_finite() && b.is_finite() && step.is_finite()) || step <= 0.0 || b < a {
         return Err(bad("need from <= to and a positive step"));
@@ -366,7 +372,10 @@ pub fn table_markdown(rows: &[(Sensor, Preview)]) -> String {
 pub fn table_csv(rows: &[(Sensor, Preview)]) -> String {
     let mut csv = String::from("design,lens,radius_mm,visible_s_all_round_mm,visible_s_max_mm,lowest_z_all_round_mm,lowest_z_mm,visible_area_mm2,visible_area_pct");
     for place in ["tip", "junction", "5mm", "10mm", "15mm"] {
-        let _ = write!(csv, ",{place}_meridian_px_per_mm,{place}_parallel_px_per_mm");
+        let _ = write!(
+            csv,
+            ",{place}_meridian_px_per_mm,{place}_parallel_px_per_mm"
+        );
     }
     csv.push('\n');
     for (sensor, p) in rows {
@@ -471,7 +480,9 @@ pub fn sweep_chart(rows: &[(Sensor, Preview)], fovs: &[f64]) -> Result<String> {
         .zip(fovs)
         .map(|((sensor, p), &fov)| {
             let tip = p.at(sensor, 0.0).map_or(0.0, |v| v.0);
-            let junction = p.at(sensor, sensor.finger.junction_s()).map_or(0.0, |v| v.0);
+            let junction = p
+                .at(sensor, sensor.finger.junction_s())
+                .map_or(0.0, |v| v.0);
             (fov, tip, junction)
         })
         .collect();
@@ -491,10 +502,16 @@ pub fn sweep_chart(rows: &[(Sensor, Preview)], fovs: &[f64]) -> Result<String> {
         ];
         for (name, k, get) in series {
             let c = plot::colour(k);
-            let pts: Vec<(f64, f64)> = rows.iter().zip(fovs).map(|((_, p), &f)| (f, get(p))).collect();
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .zip(fovs)
+                .map(|((_, p), &f)| (f, get(p)))
+                .collect();
             a.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?
                 .label(name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2))
+                });
             a.draw_series(pts.iter().map(|&q| Circle::new(q, 3, c.filled())))?;
         }
         let len = s_top;
@@ -524,7 +541,9 @@ pub fn sweep_chart(rows: &[(Sensor, Preview)], fovs: &[f64]) -> Result<String> {
                 .collect();
             b.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?
                 .label(name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2))
+                });
             b.draw_series(pts.iter().map(|&q| Circle::new(q, 3, c.filled())))?;
         }
         b.configure_series_labels()
@@ -622,9 +641,18 @@ pub fn run(
                 let _ = writeln!(md, "| {} | {:.2} |", p.sensor, sweep_score(s, p));
             }
             if let Some((_, best)) = report.best_sweep() {
-                let _ = writeln!(md, "\nBest lens of the sweep by that score: **{}**.", best.lens);
+                let _ = writeln!(
+                    md,
+                    "\nBest lens of the sweep by that score: **{}**.",
+                    best.lens
+                );
             }
-            csv.push_str(&table_csv(&report.sweep).split_once('\n').map_or("", |x| x.1).to_string());
+            csv.push_str(
+                &table_csv(&report.sweep)
+                    .split_once('\n')
+                    .map_or("", |x| x.1)
+                    .to_string(),
+            );
             output::write_atomic(
                 dir.join("lens_sweep.svg"),
                 sweep_chart(&report.sweep, &report.sweep_fovs)?.as_bytes(),
@@ -647,6 +675,12 @@ pub fn file_stem(name: &str) -> String {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| name.to_string());
     stem.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }

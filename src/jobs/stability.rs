@@ -111,8 +111,7 @@ pub fn composite_two(reference: &RgbImage, a: &RgbImage, b: &RgbImage) -> RgbIma
         .zip(a.pixels().zip(b.pixels()))
         .zip(reference.pixels())
     {
-        let diff =
-            |p: &image::Rgb<u8>| (0..3).map(|c| p.0[c].abs_diff(r.0[c]) as u32).sum::<u32>();
+        let diff = |p: &image::Rgb<u8>| (0..3).map(|c| p.0[c].abs_diff(r.0[c]) as u32).sum::<u32>();
         if diff(pb) > diff(pa) {
             *o = *pb;
         }
@@ -321,8 +320,14 @@ pub fn run(
     if let Some(dir) = out {
         output::write_atomic(dir.join("stability.md"), report.markdown().as_bytes())?;
         output::write_atomic(dir.join("stability.csv"), report.csv().as_bytes())?;
-        output::write_atomic(dir.join("detection_rate.svg"), report.rate_chart()?.as_bytes())?;
-        output::write_atomic(dir.join("error_map.svg"), report.error_map(sensor)?.as_bytes())?;
+        output::write_atomic(
+            dir.join("detection_rate.svg"),
+            report.rate_chart()?.as_bytes(),
+        )?;
+        output::write_atomic(
+            dir.join("error_map.svg"),
+            report.error_map(sensor)?.as_bytes(),
+        )?;
     }
     Ok(report)
 }
@@ -355,7 +360,12 @@ fn two_contact_trials(
                 sum += (p - ta.point).length().min((p - tb.point).length());
             }
         }
-        out.push((method, pairs, found, (found > 0).then(|| sum / found as f64)));
+        out.push((
+            method,
+            pairs,
+            found,
+            (found > 0).then(|| sum / found as f64),
+        ));
     }
     Ok(out)
 }
@@ -438,7 +448,12 @@ impl Report {
                     .iter()
                     .map(|&d| format!("{:.0}%", 100.0 * self.rate(noisy, m, d, None)))
                     .collect();
-                let _ = writeln!(md, "| {m} | {} | {} |", self.pass_name(noisy), cells.join(" | "));
+                let _ = writeln!(
+                    md,
+                    "| {m} | {} | {} |",
+                    self.pass_name(noisy),
+                    cells.join(" | ")
+                );
             }
         }
         let _ = writeln!(
@@ -538,11 +553,19 @@ impl Report {
     /// Detection rate against depth (log scale), a line per method and pass.
     pub fn rate_chart(&self) -> Result<String> {
         use plotters::prelude::*;
-        let lo = self.sweep.depths.iter().cloned().fold(f64::INFINITY, f64::min);
+        let lo = self
+            .sweep
+            .depths
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
         let hi = self.sweep.depths.iter().cloned().fold(0.0, f64::max);
         plot::svg("detection rate", (760, 440), |root| {
             let mut chart = ChartBuilder::on(root)
-                .caption("Detection rate against press depth (visible contacts)", ("sans-serif", 18))
+                .caption(
+                    "Detection rate against press depth (visible contacts)",
+                    ("sans-serif", 18),
+                )
                 .margin(12)
                 .x_label_area_size(40)
                 .y_label_area_size(50)
@@ -655,7 +678,11 @@ impl Report {
                     plot::heat(t).filled(),
                 ))?;
             }
-            bar.draw(&Text::new(format!("≥{cap} mm"), (0, -15), ("sans-serif", 11)))?;
+            bar.draw(&Text::new(
+                format!("≥{cap} mm"),
+                (0, -15),
+                ("sans-serif", 11),
+            ))?;
             bar.draw(&Text::new("0 mm", (0, h as i32 + 3), ("sans-serif", 11)))?;
             Ok(())
         })

@@ -142,9 +142,9 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
         .iter()
         .map(|p| {
             ok(p)
-                && !points.iter().any(|q| {
-                    ok(q) && q.0 >= p.0 && q.1 <= p.1 && (q.0 > p.0 || q.1 < p.1)
-                })
+                && !points
+                    .iter()
+                    .any(|q| ok(q) && q.0 >= p.0 && q.1 <= p.1 && (q.0 > p.0 || q.1 < p.1))
         })
         .collect()
 }
@@ -295,7 +295,11 @@ pub fn run(
             .iter()
             .find(|r| r.0 == w && r.1 == h)
             .expect("reference rendered above");
-        log::info!("{}: reference ready after {:.1} s", knobs.label(sensor), t0.elapsed().as_secs_f64());
+        log::info!(
+            "{}: reference ready after {:.1} s",
+            knobs.label(sensor),
+            t0.elapsed().as_secs_f64()
+        );
         let scene = match knobs.voxel_mm {
             Some(v) => as_meshes(list, v)?,
             None => list.to_vec(),
@@ -313,7 +317,11 @@ pub fn run(
                 found += 1;
             }
         }
-        log::info!("{}: accuracy done after {:.1} s", knobs.label(sensor), t0.elapsed().as_secs_f64());
+        log::info!(
+            "{}: accuracy done after {:.1} s",
+            knobs.label(sensor),
+            t0.elapsed().as_secs_f64()
+        );
         let mut rates = Vec::new();
         for _ in 0..rounds {
             let start = Instant::now();
@@ -338,7 +346,12 @@ pub fn run(
         });
         progress(&label);
     }
-    let front_img = pareto_front(&rows.iter().map(|r| (r.fps, r.image_error)).collect::<Vec<_>>());
+    let front_img = pareto_front(
+        &rows
+            .iter()
+            .map(|r| (r.fps, r.image_error))
+            .collect::<Vec<_>>(),
+    );
     // A configuration that misses contacts is scored as if each miss were 10 mm off.
     let loc_points: Vec<(f64, f64)> = rows.iter().map(|r| (r.fps, loc_score(r))).collect();
     let front_loc = pareto_front(&loc_points);
@@ -398,7 +411,11 @@ impl Report {
                 md,
                 "\nThe default is {} the image-error front and {} the localisation front.",
                 if d.on_front_image { "on" } else { "NOT on" },
-                if d.on_front_localisation { "on" } else { "NOT on" }
+                if d.on_front_localisation {
+                    "on"
+                } else {
+                    "NOT on"
+                }
             );
         }
         md
@@ -436,9 +453,11 @@ impl Report {
         let max_fps = self.rows.iter().map(|r| r.fps).fold(1.0, f64::max) * 1.15;
         type Get = fn(&Row) -> (f64, bool);
         let panels: [(&str, &str, Get); 2] = [
-            ("image error vs reference", "mean |Δ| (8-bit levels)", |r| {
-                (r.image_error, r.on_front_image)
-            }),
+            (
+                "image error vs reference",
+                "mean |Δ| (8-bit levels)",
+                |r| (r.image_error, r.on_front_image),
+            ),
             (
                 "surface detector error",
                 "mean error (mm; a miss counts 10 mm)",
