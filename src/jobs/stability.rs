@@ -6,7 +6,6 @@
 //! empty noisy frames, and two simultaneous contacts.
 
 use crate::error::{GeltipError, Result};
-use crate::jobs::preview;
 use crate::localise::{Localiser, Method};
 use crate::object::{Object, Solid};
 use crate::output;
@@ -14,6 +13,7 @@ use crate::plot;
 use crate::render::gpu::Renderer;
 use crate::render::{Contact, GroundTruth, Place};
 use crate::sensor::Sensor;
+use crate::view;
 use image::RgbImage;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -151,7 +151,7 @@ pub fn positions(sensor: &Sensor, sweep: &Sweep) -> Result<Vec<(f64, f64)>> {
     let mut out = Vec::new();
     for k in 0..sweep.azimuths {
         let az = 360.0 * k as f64 / sweep.azimuths as f64;
-        let edge = preview::visible_extent(sensor, az.to_radians());
+        let edge = view::visible_extent(sensor, az.to_radians());
         let last = (edge - 1.5).max(0.0);
         let sj = sensor.finger.junction_s();
         let mut ss: Vec<f64> = (0..sweep.positions)
@@ -190,8 +190,8 @@ pub fn run(
     let mut hidden = Vec::new();
     for k in 0..sweep.azimuths {
         let az = 360.0 * k as f64 / sweep.azimuths as f64;
-        let edge = preview::visible_extent(sensor, az.to_radians());
-        let s = (edge + 6.0).min(preview::finger_length(sensor));
+        let edge = view::visible_extent(sensor, az.to_radians());
+        let s = (edge + 6.0).min(view::finger_length(sensor));
         if s > edge + 0.5 {
             hidden.push(sphere(s, az, sensor.finger.shell_thickness));
         }
@@ -611,7 +611,7 @@ impl Report {
     pub fn error_map(&self, sensor: &Sensor) -> Result<String> {
         use plotters::prelude::*;
         let depth = self.sweep.depths.iter().cloned().fold(0.0, f64::max);
-        let s_top = preview::finger_length(sensor);
+        let s_top = view::finger_length(sensor);
         let cap = 3.0;
         let methods = self.sweep.methods.clone();
         let n = methods.len() as u32;
@@ -642,7 +642,7 @@ impl Report {
                 let edge: Vec<(f64, f64)> = (0..=72)
                     .map(|k| {
                         let az = 5.0 * k as f64;
-                        (az, preview::visible_extent(sensor, az.to_radians()))
+                        (az, view::visible_extent(sensor, az.to_radians()))
                     })
                     .collect();
                 chart.draw_series(LineSeries::new(edge, BLACK.stroke_width(1)))?;
