@@ -15,8 +15,7 @@ pub fn finger_length(sensor: &Sensor) -> f64 {
 
 /// Whether the camera sees the surface point at arc length `s` and azimuth `phi`.
 pub fn visible(sensor: &Sensor, s: f64, phi: f64) -> bool {
-    s >= 0.0
-        && s <= finger_length(sensor)
+    (0.0..=finger_length(sensor)).contains(&s)
         && sensor
             .project(sensor.finger.point_at(SurfaceCoord { s, phi }).point)
             .is_ok()

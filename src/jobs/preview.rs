@@ -317,10 +317,9 @@ pub fn table_csv(rows: &[(Sensor, Preview)]) -> String {
                 Some((m, q)) => {
                     let _ = write!(csv, ",{m},{q}");
                 }
-                None => csv.push_str(",,"),
+                None => if let Some((_, rows)) = table_csv(&report.sweep).split_once('\n') {
+                csv.push_str(rows);
             }
-        }
-        csv.push('\n');
     }
     csv
 }
