@@ -317,9 +317,10 @@ pub fn table_csv(rows: &[(Sensor, Preview)]) -> String {
                 Some((m, q)) => {
                     let _ = write!(csv, ",{m},{q}");
                 }
-                None => if let Some((_, rows)) = table_csv(&report.sweep).split_once('\n') {
-                csv.push_str(rows);
+                None => csv.push_str(",,"),
             }
+        }
+        csv.push('\n');
     }
     csv
 }
@@ -566,12 +567,9 @@ pub fn run(
                     best.lens
                 );
             }
-            csv.push_str(
-                &table_csv(&report.sweep)
-                    .split_once('\n')
-                    .map_or("", |x| x.1)
-                    .to_string(),
-            );
+            if let Some((_, rows)) = table_csv(&report.sweep).split_once('\n') {
+                csv.push_str(rows);
+            }
             output::write_atomic(
                 dir.join("lens_sweep.svg"),
                 sweep_chart(&report.sweep, &report.sweep_fovs)?.as_bytes(),
