@@ -20,3 +20,4 @@ pub mod object;
 pub mod output;
 pub mod plot;
 pub mod render;
+pub mod view;

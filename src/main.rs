@@ -4,6 +4,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
+use geltip::jobs::{preview, stability, tradeoff};
 use geltip::localise::{load_frame, localise, Method};
 use geltip::object::{Object, Solid};
 use geltip::output;
@@ -207,6 +208,77 @@ enum Command {
         #[arg(long, num_args = 2.., value_name = "DIR")]
         merge: Vec<PathBuf>,
     },
+    /// Preview sensor designs before building them: what the camera sees, the resolution
+    /// down the finger, a picture per design, and a lens sweep.
+    ///
+    /// Example:
+    ///   geltip preview --sensors paper,webcam70,tube13,tube21 --out out/preview
+    #[command(verbatim_doc_comment)]
+    Preview {
+        /// Comma-separated presets or sensor TOML files.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "paper,webcam70,tube13,tube21"
+        )]
+        sensors: Vec<String>,
+        /// Directory for the pictures, charts and table.
+        #[arg(long)]
+        out: PathBuf,
+        /// Lens sweep of the first design: equidistant fisheye fields of view <from>:<to>:<step>
+        /// in degrees ("none" to skip).
+        #[arg(long, default_value = "120:200:10")]
+        sweep_fov: String,
+        /// Skip the rendered pictures (geometry only, no GPU).
+        #[arg(long)]
+        no_pictures: bool,
+    },
+    /// Where the detectors fail: a sweep of contacts over everything the lens sees and press
+    /// depths up to the shell thickness, with and without sensor noise.
+    ///
+    /// Example:
+    ///   geltip stability --sensor paper --out out/stability
+    #[command(verbatim_doc_comment)]
+    Stability {
+        #[arg(long)]
+        sensor: String,
+        #[arg(long)]
+        out: PathBuf,
+        /// Detectors to test (comma separated): paper, surface.
+        #[arg(long, value_delimiter = ',', default_value = "paper,surface")]
+        method: Vec<String>,
+        /// Arc-length positions per azimuth, tip to lens edge (plus both sides of the junction).
+        #[arg(long, default_value_t = 3)]
+        positions: usize,
+        /// Azimuths round the finger.
+        #[arg(long, default_value_t = 2)]
+        azimuths: usize,
+        /// Press depths (mm, comma separated); default 0.01 .. the shell thickness.
+        #[arg(long, value_delimiter = ',')]
+        depths: Option<Vec<f64>>,
+        /// Sensor noise of the noisy pass (8-bit grey levels); 0 skips it.
+        #[arg(long, default_value_t = 2.0)]
+        noise: f64,
+    },
+    /// Speed against accuracy for the renderer's knobs (heightfield texels, ray steps, image
+    /// size, mesh SDF voxel size): frames/s, image error and localisation error, Pareto chart.
+    ///
+    /// Example:
+    ///   geltip tradeoff --sensor paper --out out/tradeoff
+    #[command(verbatim_doc_comment)]
+    Tradeoff {
+        #[arg(long)]
+        sensor: String,
+        #[arg(long)]
+        out: PathBuf,
+        /// Also every texels x steps pair (128..512 x 4..32), image scale 0.75, voxel 0.125 mm,
+        /// and all eight contacts instead of four.
+        #[arg(long)]
+        full: bool,
+        /// Speed rounds per configuration (the median is kept).
+        #[arg(long, default_value_t = 3)]
+        rounds: usize,
+    },
     /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
     Objects {
         /// Directory to write into.
@@ -248,6 +320,33 @@ fn progress_reporter(unit: &'static str) -> Result<impl FnMut(dataset::Progress)
             eprintln!("{}/{} {unit} ({rate:.1}/s)", p.done, p.total);
         }
     })
+}
+
+/// A progress bar on a terminal; plain periodic lines on stderr otherwise (indicatif hides
+/// itself when stderr is not a terminal, so those lines come from the caller's messages).
+fn progress_bar(unit: &str) -> Result<ProgressBar> {
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template(&format!(
+            "{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} {{msg}}"
+        ))?
+        .progress_chars("=> "),
+    );
+    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        let unit = unit.to_string();
+        let shown = bar.clone();
+        std::thread::spawn(move || loop {
+            std::thread::sleep(std::time::Duration::from_secs(5));
+            if shown.is_finished() {
+                break;
+            }
+            eprintln!(
+                "{}/{} {unit}",
+                shown.position(),
+                shown.length().unwrap_or(0)
+            );
+        });
+    }
+    Ok(bar)
 }
 
 fn main() {
@@ -461,6 +560,92 @@ fn run(cli: Cli) -> Result<()> {
                     "rendered": report.rendered,
                     "samples_per_s": report.rendered as f64 / report.wall.as_secs_f64().max(1e-9),
                 })
+            );
+        }
+        Command::Preview {
+            sensors,
+            out,
+            sweep_fov,
+            no_pictures,
+        } => {
+            let designs = sensors
+                .iter()
+                .map(|s| Sensor::load(s.trim()))
+                .collect::<geltip::Result<Vec<_>>>()?;
+            let fovs = if sweep_fov == "none" {
+                vec![]
+            } else {
+                preview::parse_range(&sweep_fov)?
+            };
+            let report = preview::run(&designs, &fovs, Some(&out), !no_pictures, |name| {
+                eprintln!("previewed {name}");
+            })?;
+            println!("{}", preview::table_markdown(&report.designs));
+            if let Some((_, best)) = report.best_sweep() {
+                println!("Best lens of the sweep: {}", best.lens);
+            }
+            println!(
+                "Wrote {}: preview.md, preview.csv, resolution.svg, lens_sweep.svg, <design>.png",
+                out.display()
+            );
+        }
+        Command::Stability {
+            sensor,
+            out,
+            method,
+            positions,
+            azimuths,
+            depths,
+            noise,
+        } => {
+            let sensor = Sensor::load(&sensor)?;
+            let mut sweep = stability::Sweep::default_for(&sensor);
+            sweep.methods = method
+                .iter()
+                .map(|m| Method::from_name(m.trim()))
+                .collect::<geltip::Result<_>>()?;
+            sweep.positions = positions;
+            sweep.azimuths = azimuths;
+            if let Some(d) = depths {
+                sweep.depths = d;
+            }
+            if !(noise.is_finite() && noise >= 0.0) {
+                anyhow::bail!("--noise: must be a finite number >= 0, got {noise}");
+            }
+            sweep.noise = noise;
+            let bar = progress_bar("contacts")?;
+            let report = stability::run(&sensor, &sweep, Some(&out), |done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            })?;
+            bar.finish_and_clear();
+            println!("{}", report.markdown());
+            println!(
+                "Wrote {}: stability.md, stability.csv, detection_rate.svg, error_map.svg",
+                out.display()
+            );
+        }
+        Command::Tradeoff {
+            sensor,
+            out,
+            full,
+            rounds,
+        } => {
+            let sensor = Sensor::load(&sensor)?;
+            let configs = tradeoff::configurations(&sensor, full);
+            let bar = progress_bar("configurations")?;
+            bar.set_length(configs.len() as u64);
+            let contacts = tradeoff::contacts(full);
+            let report =
+                tradeoff::run(&sensor, &configs, &contacts, rounds, Some(&out), |label| {
+                    bar.set_message(label.to_string());
+                    bar.inc(1);
+                })?;
+            bar.finish_and_clear();
+            println!("{}", report.markdown());
+            println!(
+                "Wrote {}: tradeoff.md, tradeoff.csv, tradeoff.svg",
+                out.display()
             );
         }
         Command::Objects { out } => {

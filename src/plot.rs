@@ -46,3 +46,25 @@ pub fn svg(
     }
     Ok(text)
 }
+
+/// A colour for `t` in 0..1 on a blue (0) - green - yellow - red (1) scale, for maps where
+/// colour is a value; `t` outside 0..1 (or NaN) is clamped (NaN to 0).
+pub fn heat(t: f64) -> RGBColor {
+    let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
+    let stops = [
+        (0.0, (49.0, 54.0, 149.0)),
+        (0.33, (44.0, 160.0, 44.0)),
+        (0.66, (240.0, 200.0, 30.0)),
+        (1.0, (214.0, 39.0, 40.0)),
+    ];
+    let k = stops
+        .iter()
+        .rposition(|s| s.0 <= t)
+        .unwrap_or(0)
+        .min(stops.len() - 2);
+    let (t0, a) = stops[k];
+    let (t1, b) = stops[k + 1];
+    let w = (t - t0) / (t1 - t0);
+    let mix = |x: f64, y: f64| (x + (y - x) * w).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}

@@ -1,5 +1,10 @@
 //! The user-facing jobs, one module each, built on the library's sensor, render and localise
 //! API (never on each other's internals): [`experiment`] reproduces the paper's
-//! localisation experiment; [`dataset`] renders labelled synthetic datasets.
+//! localisation experiment; [`dataset`] renders labelled synthetic datasets; [`preview`]
+//! shows what a sensor design sees; [`stability`] sweeps contacts to find where the
+//! detectors fail; [`tradeoff`] measures the renderer's knobs for speed against accuracy.
 pub mod dataset;
 pub mod experiment;
+pub mod preview;
+pub mod stability;
+pub mod tradeoff;

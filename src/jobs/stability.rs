@@ -1,0 +1,715 @@
+//! `geltip stability`: where the detectors fail. A sweep of sphere contacts over what the
+//! lens sees (arc lengths from the tip to the lens edge, both sides of the junction, several
+//! azimuths) and press depths from 0.01 mm to the shell thickness, localised by each
+//! detector, with and without sensor noise. Also: contacts the lens cannot see (they must
+//! come out "not visible" when nothing of them reaches the image), false detections on
+//! empty noisy frames, and two simultaneous contacts.
+
+use crate::error::{GeltipError, Result};
+use crate::localise::{Localiser, Method};
+use crate::object::{Object, Solid};
+use crate::output;
+use crate::plot;
+use crate::render::gpu::Renderer;
+use crate::render::{Contact, GroundTruth, Place};
+use crate::sensor::Sensor;
+use crate::view;
+use image::RgbImage;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The sweep's size.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    /// Arc-length positions, evenly spaced from the tip to 1.5 mm above the lens edge (the
+    /// junction's two sides, 1 mm either way, are always added).
+    pub positions: usize,
+    /// Azimuths, evenly spaced round the finger.
+    pub azimuths: usize,
+    /// Press depths (mm); the default is 0.01 mm .. the shell thickness.
+    pub depths: Vec<f64>,
+    /// Sensor noise (8-bit grey levels) of the noisy pass; 0 skips it.
+    pub noise: f64,
+    /// How far (mm of arc) below the lens edge the hidden contacts are placed (capped at
+    /// the finger's end).
+    pub hidden_offset_mm: f64,
+    /// Empty noisy frames checked for false detections.
+    pub empty_frames: usize,
+    pub methods: Vec<Method>,
+}
+
+impl Sweep {
+    /// The default sweep for `sensor`: well under a minute on a 2-core lavapipe host.
+    pub fn default_for(sensor: &Sensor) -> Sweep {
+        let t = sensor.finger.shell_thickness;
+        Sweep {
+            positions: 3,
+            azimuths: 2,
+            depths: vec![0.01, 0.03, 0.1, 0.3, t],
+            noise: 2.0,
+            hidden_offset_mm: 6.0,
+            empty_frames: 10,
+            methods: Method::ALL.to_vec(),
+        }
+    }
+}
+
+/// The part of the finger a contact is in, for "smallest depth detected 95%" per region.
+pub fn region_of(sensor: &Sensor, s: f64) -> &'static str {
+    let sj = sensor.finger.junction_s();
+    if s < 0.25 * sj {
+        "tip"
+    } else if s < sj - 0.5 {
+        "hemisphere"
+    } else if s <= sj + 2.0 {
+        "junction"
+    } else {
+        "side"
+    }
+}
+
+/// Region names in report order.
+pub const REGIONS: [&str; 4] = ["tip", "hemisphere", "junction", "side"];
+
+/// One localisation of one contact.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trial {
+    pub noisy: bool,
+    pub method: Method,
+    pub s: f64,
+    pub azimuth_deg: f64,
+    pub depth: f64,
+    pub region: &'static str,
+    /// The contact point's pixel is in the image.
+    pub visible: bool,
+    /// Pixels pressed in by more than 0.01 mm.
+    pub mask_pixels: u64,
+    /// Whether the noise-free render of this contact differs from the empty finger at all
+    /// (the gel's bulge and shading reach further than the pressed pixels).
+    pub image_changed: bool,
+    pub detected: bool,
+    pub error_mm: Option<f64>,
+}
+
+/// Everything the sweep measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    pub sensor: String,
+    pub sweep: Sweep,
+    pub trials: Vec<Trial>,
+    /// Non-finite numbers met in detections (the job errors before returning if any).
+    pub non_finite: usize,
+    /// Per (noisy, method): detections on the empty frames.
+    pub false_detections: Vec<(bool, Method, usize, usize)>,
+    /// Per method: (pairs, pairs where something was detected, mean distance to the nearer
+    /// of the two contacts).
+    pub two_contacts: Vec<(Method, usize, usize, Option<f64>)>,
+}
+
+/// The stand-in for multi-contact rendering (until the renderer draws several contacts in
+/// one frame): per pixel, the frame of `a` or `b` that differs more from `reference` (sum of
+/// absolute channel differences). Imprints far apart composite exactly; overlapping ones
+/// keep the stronger of the two per pixel instead of the physics of both.
+pub fn composite_two(reference: &RgbImage, a: &RgbImage, b: &RgbImage) -> RgbImage {
+    let mut out = a.clone();
+    for ((o, (pa, pb)), r) in out
+        .pixels_mut()
+        .zip(a.pixels().zip(b.pixels()))
+        .zip(reference.pixels())
+    {
+        let diff = |p: &image::Rgb<u8>| (0..3).map(|c| p.0[c].abs_diff(r.0[c]) as u32).sum::<u32>();
+        if diff(pb) > diff(pa) {
+            *o = *pb;
+        }
+    }
+    out
+}
+
+fn sphere(s: f64, azimuth_deg: f64, depth: f64) -> Contact {
+    Contact {
+        object: Arc::new(Object::Solid(Solid::Sphere)),
+        place: Place::ArcLength(s),
+        azimuth_deg,
+        spin_deg: 0.0,
+        depth_mm: depth,
+    }
+}
+
+/// The visible contact positions: (s, azimuth) pairs.
+pub fn positions(sensor: &Sensor, sweep: &Sweep) -> Result<Vec<(f64, f64)>> {
+    if sweep.positions < 2 || sweep.azimuths < 1 || sweep.depths.is_empty() {
+        return Err(GeltipError::input(
+            "stability sweep",
+            "needs at least 2 positions, 1 azimuth and 1 depth",
+        ));
+    }
+    let t = sensor.finger.shell_thickness;
+    if let Some(d) = sweep
+        .depths
+        .iter()
+        .find(|d| !d.is_finite() || **d <= 0.0 || **d > t)
+    {
+        return Err(GeltipError::input(
+            "--depths",
+            format!("every depth must be in (0, {t}] mm (the shell thickness), got {d}"),
+        ));
+    }
+    let mut out = Vec::new();
+    for k in 0..sweep.azimuths {
+        let az = 360.0 * k as f64 / sweep.azimuths as f64;
+        let edge = view::visible_extent(sensor, az.to_radians());
+        let last = (edge - 1.5).max(0.0);
+        let sj = sensor.finger.junction_s();
+        let mut ss: Vec<f64> = (0..sweep.positions)
+            .map(|i| last * i as f64 / (sweep.positions - 1) as f64)
+            .collect();
+        for s in [sj - 1.0, sj + 1.0] {
+            if s < last {
+                ss.push(s);
+            }
+        }
+        ss.sort_by(f64::total_cmp);
+        out.extend(ss.into_iter().map(|s| (s, az)));
+    }
+    Ok(out)
+}
+
+fn finite(d: &crate::localise::Detection) -> bool {
+    d.pixel.is_none_or(|p| p.is_finite())
+        && d.point.is_none_or(|p| p.is_finite())
+        && d.confidence.is_finite()
+}
+
+/// Runs the sweep. `progress(done, total)` is called after each rendered batch.
+pub fn run(
+    sensor: &Sensor,
+    sweep: &Sweep,
+    out: Option<&Path>,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Report> {
+    if sweep.methods.is_empty() {
+        return Err(GeltipError::input("--method", "no methods to test"));
+    }
+    let places = positions(sensor, sweep)?;
+    // Contacts the lens cannot see: well below the visible edge of each azimuth (when the
+    // finger goes on that far), at full depth.
+    let mut hidden = Vec::new();
+    for k in 0..sweep.azimuths {
+        let az = 360.0 * k as f64 / sweep.azimuths as f64;
+        let edge = view::visible_extent(sensor, az.to_radians());
+        let s = (edge + sweep.hidden_offset_mm).min(view::finger_length(sensor));
+        if s > edge + 0.5 {
+            hidden.push(sphere(s, az, sensor.finger.shell_thickness));
+        }
+    }
+    let passes: Vec<bool> = if sweep.noise > 0.0 {
+        vec![false, true]
+    } else {
+        vec![false]
+    };
+    let total = passes.len() * (places.len() * sweep.depths.len() + hidden.len());
+    let mut done = 0;
+    let mut trials = Vec::new();
+    let mut non_finite = 0;
+    let mut false_detections = Vec::new();
+    let mut two_contacts = Vec::new();
+    for &noisy in &passes {
+        let mut config = sensor.config.clone();
+        config.render.noise = if noisy { sweep.noise } else { 0.0 };
+        let variant = Sensor::from_config(
+            if noisy {
+                format!("{} + noise {}", sensor.name, sweep.noise)
+            } else {
+                sensor.name.clone()
+            },
+            config,
+        )?;
+        let mut renderer = Renderer::new(&variant)?;
+        let localiser = Localiser::new(&variant);
+        let reference = renderer.render_empty()?.to_rgb();
+        let mut contacts: Vec<Contact> = Vec::new();
+        for &depth in &sweep.depths {
+            for &(s, az) in &places {
+                contacts.push(sphere(s, az, depth));
+            }
+        }
+        contacts.extend(hidden.iter().cloned());
+        // Two simultaneous contacts: opposite azimuths at each visible arc length, at the
+        // sweep's deepest depth.
+        let pair_depth = sweep.depths.iter().cloned().fold(0.0, f64::max);
+        let mut pair_frames: Vec<(RgbImage, GroundTruth)> = Vec::new();
+        for chunk in contacts.chunks(16) {
+            let rendered = renderer.render_batch(chunk)?;
+            for (frame, truth) in rendered {
+                // In the noisy pass this is settled from the noise-free pass below.
+                let image_changed = noisy || frame.rgba != renderer.reference().rgba;
+                let image = frame.to_rgb();
+                let visible = truth.pixel.is_ok();
+                for &method in &sweep.methods {
+                    let d = localiser.localise(&reference, &image, method)?;
+                    if !finite(&d) {
+                        non_finite += 1;
+                    }
+                    let error_mm = d
+                        .point
+                        .filter(|_| d.detected)
+                        .map(|p| (p - truth.point).length());
+                    trials.push(Trial {
+                        noisy,
+                        method,
+                        s: truth.s_mm,
+                        azimuth_deg: truth.azimuth_deg,
+                        depth: truth.depth_mm,
+                        region: region_of(sensor, truth.s_mm),
+                        visible,
+                        mask_pixels: truth.mask_pixels,
+                        image_changed,
+                        detected: d.detected,
+                        error_mm,
+                    });
+                }
+                if !noisy
+                    && (truth.depth_mm - pair_depth).abs() < 1e-9
+                    && visible
+                    && pair_frames.len() < 2 * places.len()
+                {
+                    pair_frames.push((image, truth));
+                }
+            }
+            done += chunk.len();
+            progress(done, total);
+        }
+        // False detections on empty frames.
+        let mut empties = Vec::new();
+        for _ in 0..sweep.empty_frames {
+            empties.push(renderer.render_empty()?.to_rgb());
+        }
+        for &method in &sweep.methods {
+            let mut hits = 0;
+            for e in &empties {
+                let d = localiser.localise(&reference, e, method)?;
+                if !finite(&d) {
+                    non_finite += 1;
+                }
+                hits += d.detected as usize;
+            }
+            false_detections.push((noisy, method, hits, empties.len()));
+        }
+        if !noisy {
+            two_contacts = two_contact_trials(&localiser, &reference, &pair_frames, sweep)?;
+        }
+    }
+    // The noisy pass's contacts leave a trace exactly when their noise-free twins do.
+    let clean: Vec<(f64, f64, f64, bool)> = trials
+        .iter()
+        .filter(|t| !t.noisy)
+        .map(|t| (t.s, t.azimuth_deg, t.depth, t.image_changed))
+        .collect();
+    for t in trials.iter_mut().filter(|t| t.noisy) {
+        if let Some(c) = clean
+            .iter()
+            .find(|c| c.0 == t.s && c.1 == t.azimuth_deg && c.2 == t.depth)
+        {
+            t.image_changed = c.3;
+        }
+    }
+    if non_finite > 0 {
+        return Err(GeltipError::input(
+            format!("stability sweep on '{}'", sensor.name),
+            format!("{non_finite} detections held NaN or infinite numbers"),
+        ));
+    }
+    // A contact of which nothing reaches the image must never be localised.
+    if let Some(t) = trials
+        .iter()
+        .find(|t| !t.visible && !t.image_changed && t.detected)
+    {
+        return Err(GeltipError::input(
+            format!("stability sweep on '{}'", sensor.name),
+            format!(
+                "the {} detector placed a contact the lens cannot see (s {:.2} mm, azimuth {}°)",
+                t.method, t.s, t.azimuth_deg
+            ),
+        ));
+    }
+    let report = Report {
+        sensor: sensor.name.clone(),
+        sweep: sweep.clone(),
+        trials,
+        non_finite,
+        false_detections,
+        two_contacts,
+    };
+    if let Some(dir) = out {
+        output::write_atomic(dir.join("stability.md"), report.markdown().as_bytes())?;
+        output::write_atomic(dir.join("stability.csv"), report.csv().as_bytes())?;
+        output::write_atomic(
+            dir.join("detection_rate.svg"),
+            report.rate_chart()?.as_bytes(),
+        )?;
+        output::write_atomic(
+            dir.join("error_map.svg"),
+            report.error_map(sensor)?.as_bytes(),
+        )?;
+    }
+    Ok(report)
+}
+
+/// Pairs of single-contact frames (same arc length, azimuths half a turn apart where the
+/// sweep has them, else consecutive frames) composited by [`composite_two`].
+fn two_contact_trials(
+    localiser: &Localiser,
+    reference: &RgbImage,
+    frames: &[(RgbImage, GroundTruth)],
+    sweep: &Sweep,
+) -> Result<Vec<(Method, usize, usize, Option<f64>)>> {
+    let n = frames.len();
+    let half = if sweep.azimuths >= 2 && n >= 2 {
+        n / 2
+    } else {
+        1
+    };
+    let mut out = Vec::new();
+    for &method in &sweep.methods {
+        let (mut pairs, mut found, mut sum) = (0, 0, 0.0);
+        for i in 0..n.saturating_sub(half) {
+            let (a, ta) = &frames[i];
+            let (b, tb) = &frames[i + half];
+            let image = composite_two(reference, a, b);
+            let d = localiser.localise(reference, &image, method)?;
+            pairs += 1;
+            if let (true, Some(p)) = (d.detected, d.point) {
+                found += 1;
+                sum += (p - ta.point).length().min((p - tb.point).length());
+            }
+        }
+        out.push((
+            method,
+            pairs,
+            found,
+            (found > 0).then(|| sum / found as f64),
+        ));
+    }
+    Ok(out)
+}
+
+impl Report {
+    fn visible_trials(&self, noisy: bool, method: Method) -> impl Iterator<Item = &Trial> {
+        self.trials
+            .iter()
+            .filter(move |t| t.noisy == noisy && t.method == method && t.visible)
+    }
+
+    /// Fraction of visible contacts detected at `depth`.
+    pub fn rate(&self, noisy: bool, method: Method, depth: f64, region: Option<&str>) -> f64 {
+        let (mut n, mut k) = (0, 0);
+        for t in self.visible_trials(noisy, method) {
+            if (t.depth - depth).abs() < 1e-12 && region.is_none_or(|r| r == t.region) {
+                n += 1;
+                k += t.detected as usize;
+            }
+        }
+        if n == 0 {
+            0.0
+        } else {
+            k as f64 / n as f64
+        }
+    }
+
+    /// The smallest sweep depth from which on every deeper one is detected >= 95% of the time
+    /// in `region`, or `None`.
+    pub fn depth_95(&self, noisy: bool, method: Method, region: &str) -> Option<f64> {
+        let has = self
+            .visible_trials(noisy, method)
+            .any(|t| t.region == region);
+        if !has {
+            return None;
+        }
+        let mut best = None;
+        for &d in self.sweep.depths.iter().rev() {
+            if self.rate(noisy, method, d, Some(region)) >= 0.95 {
+                best = Some(d);
+            } else {
+                break;
+            }
+        }
+        best
+    }
+
+    fn passes(&self) -> Vec<bool> {
+        let mut p = vec![false];
+        if self.trials.iter().any(|t| t.noisy) {
+            p.push(true);
+        }
+        p
+    }
+
+    fn pass_name(&self, noisy: bool) -> String {
+        if noisy {
+            format!("noise σ={}", self.sweep.noise)
+        } else {
+            "no noise".into()
+        }
+    }
+
+    /// The report's tables.
+    pub fn markdown(&self) -> String {
+        let mut md = format!(
+            "Sensor `{}`: sphere contacts at {} visible places x {} depths; NaN/inf in detections: {}.\n\n**Detection rate against depth (visible contacts)**\n\n| method | pass | {} |\n|---|---|{}\n",
+            self.sensor,
+            self.trials.iter().filter(|t| t.visible && !t.noisy && t.method == self.sweep.methods[0] && (t.depth - self.sweep.depths[0]).abs() < 1e-12).count(),
+            self.sweep.depths.len(),
+            self.non_finite,
+            self.sweep.depths.iter().map(|d| format!("{d} mm")).collect::<Vec<_>>().join(" | "),
+            "---|".repeat(self.sweep.depths.len()),
+        );
+        for &noisy in &self.passes() {
+            for &m in &self.sweep.methods {
+                let cells: Vec<String> = self
+                    .sweep
+                    .depths
+                    .iter()
+                    .map(|&d| format!("{:.0}%", 100.0 * self.rate(noisy, m, d, None)))
+                    .collect();
+                let _ = writeln!(
+                    md,
+                    "| {m} | {} | {} |",
+                    self.pass_name(noisy),
+                    cells.join(" | ")
+                );
+            }
+        }
+        let _ = writeln!(
+            md,
+            "\n**Smallest depth detected ≥ 95% (and at every deeper depth), per region; mean error (mm) of detected contacts at ≥ 0.3 mm**\n\n| method | pass | {} | mean error |\n|---|---|{}---|",
+            REGIONS.join(" | "),
+            "---|".repeat(REGIONS.len())
+        );
+        for &noisy in &self.passes() {
+            for &m in &self.sweep.methods {
+                let cells: Vec<String> = REGIONS
+                    .iter()
+                    .map(|r| match self.depth_95(noisy, m, r) {
+                        Some(d) => format!("{d} mm"),
+                        None => "never".into(),
+                    })
+                    .collect();
+                let errs: Vec<f64> = self
+                    .visible_trials(noisy, m)
+                    .filter(|t| t.depth >= 0.3)
+                    .filter_map(|t| t.error_mm)
+                    .collect();
+                let mean = if errs.is_empty() {
+                    "—".into()
+                } else {
+                    format!("{:.2}", errs.iter().sum::<f64>() / errs.len() as f64)
+                };
+                let _ = writeln!(
+                    md,
+                    "| {m} | {} | {} | {mean} |",
+                    self.pass_name(noisy),
+                    cells.join(" | ")
+                );
+            }
+        }
+        let _ = writeln!(md, "\n**Contacts the lens cannot see** (full depth, up to 6 mm below the visible edge of their meridian, where the finger goes on that far)\n\n| method | pass | contacts | leaving no trace in the image | localised anyway | of which leaving no trace |\n|---|---|---|---|---|---|");
+        for &noisy in &self.passes() {
+            for &m in &self.sweep.methods {
+                let hidden: Vec<&Trial> = self
+                    .trials
+                    .iter()
+                    .filter(|t| t.noisy == noisy && t.method == m && !t.visible)
+                    .collect();
+                let _ = writeln!(
+                    md,
+                    "| {m} | {} | {} | {} | {} | {} |",
+                    self.pass_name(noisy),
+                    hidden.len(),
+                    hidden.iter().filter(|t| !t.image_changed).count(),
+                    hidden.iter().filter(|t| t.detected).count(),
+                    hidden
+                        .iter()
+                        .filter(|t| t.detected && !t.image_changed)
+                        .count()
+                );
+            }
+        }
+        let _ = writeln!(md, "\n**False detections on empty frames**\n\n| method | pass | detected / frames |\n|---|---|---|");
+        for (noisy, m, hits, n) in &self.false_detections {
+            let _ = writeln!(md, "| {m} | {} | {hits} / {n} |", self.pass_name(*noisy));
+        }
+        let _ = writeln!(md, "\n**Two simultaneous contacts** (at the deepest depth, composited from two single-contact renders on opposite meridians; see `composite_two`)\n\n| method | pairs | something detected | mean distance to the nearer contact (mm) |\n|---|---|---|---|");
+        for (m, pairs, found, err) in &self.two_contacts {
+            let _ = writeln!(
+                md,
+                "| {m} | {pairs} | {found} | {} |",
+                err.map_or("—".into(), |e| format!("{e:.2}"))
+            );
+        }
+        md
+    }
+
+    /// Every trial, CSV.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from(
+            "noisy,method,s_mm,azimuth_deg,depth_mm,region,visible,mask_pixels,image_changed,detected,error_mm\n",
+        );
+        for t in &self.trials {
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},{},{},{},{},{},{},{}",
+                t.noisy,
+                t.method,
+                t.s,
+                t.azimuth_deg,
+                t.depth,
+                t.region,
+                t.visible,
+                t.mask_pixels,
+                t.image_changed,
+                t.detected,
+                t.error_mm.map(|e| e.to_string()).unwrap_or_default()
+            );
+        }
+        csv
+    }
+
+    /// Detection rate against depth (log scale), a line per method and pass.
+    pub fn rate_chart(&self) -> Result<String> {
+        use plotters::prelude::*;
+        let lo = self
+            .sweep
+            .depths
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
+        let hi = self.sweep.depths.iter().cloned().fold(0.0, f64::max);
+        plot::svg("detection rate", (760, 440), |root| {
+            let mut chart = ChartBuilder::on(root)
+                .caption(
+                    "Detection rate against press depth (visible contacts)",
+                    ("sans-serif", 18),
+                )
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(50)
+                .build_cartesian_2d((lo * 0.8..hi * 1.2).log_scale(), 0f64..105f64)?;
+            chart
+                .configure_mesh()
+                .x_desc("press depth (mm, log scale)")
+                .y_desc("detected (%)")
+                .draw()?;
+            let mut k = 0;
+            for &noisy in &self.passes() {
+                for &m in &self.sweep.methods {
+                    let c = plot::colour(k);
+                    k += 1;
+                    let pts: Vec<(f64, f64)> = self
+                        .sweep
+                        .depths
+                        .iter()
+                        .map(|&d| (d, 100.0 * self.rate(noisy, m, d, None)))
+                        .collect();
+                    chart
+                        .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?
+                        .label(format!("{m}, {}", self.pass_name(noisy)))
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2))
+                        });
+                    chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
+                }
+            }
+            chart
+                .configure_series_labels()
+                .border_style(BLACK)
+                .background_style(WHITE.mix(0.9))
+                .position(SeriesLabelPosition::LowerRight)
+                .draw()?;
+            Ok(())
+        })
+    }
+
+    /// Error against position over the unrolled finger (azimuth across, arc length down),
+    /// colour = error (mm) of the noise-free trials at the deepest sweep depth; a cross
+    /// where the contact was missed. One panel per method.
+    pub fn error_map(&self, sensor: &Sensor) -> Result<String> {
+        use plotters::prelude::*;
+        let depth = self.sweep.depths.iter().cloned().fold(0.0, f64::max);
+        let s_top = view::finger_length(sensor);
+        let cap = 3.0;
+        let methods = self.sweep.methods.clone();
+        let n = methods.len() as u32;
+        plot::svg("error map", (420 * n + 80, 520), |root| {
+            let (panels, legend) = root.split_horizontally(420 * n);
+            let areas = panels.split_evenly((1, n as usize));
+            for (area, &m) in areas.iter().zip(&methods) {
+                let mut chart = ChartBuilder::on(area)
+                    .caption(
+                        format!("{m}: error at {depth} mm deep (no noise)"),
+                        ("sans-serif", 15),
+                    )
+                    .margin(10)
+                    .x_label_area_size(35)
+                    .y_label_area_size(45)
+                    .build_cartesian_2d(-20f64..360f64, s_top..0f64)?;
+                chart
+                    .configure_mesh()
+                    .x_desc("azimuth (°)")
+                    .y_desc("arc length from the tip (mm)")
+                    .draw()?;
+                let sj = sensor.finger.junction_s();
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(-20.0, sj), (360.0, sj)],
+                    plot::REFERENCE_GREY,
+                )))?;
+                // The lens edge per azimuth.
+                let edge: Vec<(f64, f64)> = (0..=72)
+                    .map(|k| {
+                        let az = 5.0 * k as f64;
+                        (az, view::visible_extent(sensor, az.to_radians()))
+                    })
+                    .collect();
+                chart.draw_series(LineSeries::new(edge, BLACK.stroke_width(1)))?;
+                for t in self.trials.iter().filter(|t| {
+                    !t.noisy && t.method == m && (t.depth - depth).abs() < 1e-12 && t.visible
+                }) {
+                    let pos = (t.azimuth_deg, t.s);
+                    match t.error_mm {
+                        Some(e) => {
+                            chart.draw_series(std::iter::once(Circle::new(
+                                pos,
+                                7,
+                                plot::heat(e / cap).filled(),
+                            )))?;
+                        }
+                        None => {
+                            chart.draw_series(std::iter::once(Cross::new(
+                                pos,
+                                6,
+                                BLACK.stroke_width(2),
+                            )))?;
+                        }
+                    }
+                }
+            }
+            // Colour bar.
+            let bar = legend.margin(60, 60, 10, 30);
+            let (_, h) = bar.dim_in_pixel();
+            for y in 0..h {
+                let t = 1.0 - y as f64 / h as f64;
+                bar.draw(&Rectangle::new(
+                    [(0, y as i32), (15, y as i32 + 1)],
+                    plot::heat(t).filled(),
+                ))?;
+            }
+            bar.draw(&Text::new(
+                format!("≥{cap} mm"),
+                (0, -15),
+                ("sans-serif", 11),
+            ))?;
+            bar.draw(&Text::new("0 mm", (0, h as i32 + 3), ("sans-serif", 11)))?;
+            Ok(())
+        })
+    }
+}

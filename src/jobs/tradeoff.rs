@@ -1,0 +1,543 @@
+//! `geltip tradeoff`: the renderer's knobs that trade speed for accuracy, measured on both
+//! axes in one run. Knobs: heightfield texels, ray steps, image size, and the SDF grid's
+//! voxel size for meshes. Each configuration renders the same eight contacts (one per tap
+//! position of the paper, each with another of the seven solids) and is scored by
+//! - speed: frames/s, one contact per submit, the median of a few rounds;
+//! - image error: mean absolute 8-bit difference against a high-resolution reference (1024
+//!   texels, 48 ray steps, analytic solids) of the same size, over the pixels either render
+//!   changes;
+//! - localisation error: the surface detector's mean error (mm) against the exact contact
+//!   points, and how many contacts it missed.
+//!
+//! A configuration is on the Pareto front when no other is at least as fast and at least as
+//! accurate, and strictly better in one.
+
+use crate::error::{GeltipError, Result};
+use crate::jobs::experiment::{self, Protocol};
+use crate::localise::{Localiser, Method};
+use crate::object::{Object, SdfGrid, Solid, MESH_PAD_MM, MESH_VOXEL_MM};
+use crate::output;
+use crate::plot;
+use crate::render::gpu::Renderer;
+use crate::render::{Contact, Frame, GroundTruth};
+use crate::sensor::Sensor;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One setting of the knobs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Knobs {
+    pub texels: u32,
+    pub ray_steps: u32,
+    /// Image scale against the sensor's own size (1 = as configured, 0.5 = half each side).
+    pub image_scale: f64,
+    /// `None`: the analytic solids; `Some(v)`: the solids as meshes baked on voxels of v mm.
+    pub voxel_mm: Option<f64>,
+}
+
+impl Knobs {
+    /// The sensor's own render settings, the solids analytic.
+    pub fn default_for(sensor: &Sensor) -> Knobs {
+        Knobs {
+            texels: sensor.config.render.heightfield_texels,
+            ray_steps: sensor.config.render.ray_steps,
+            image_scale: 1.0,
+            voxel_mm: None,
+        }
+    }
+
+    /// "256 texels, 8 steps, 640x480, mesh 0.25 mm".
+    pub fn label(&self, sensor: &Sensor) -> String {
+        let (w, h) = scaled_size(sensor, self.image_scale);
+        let mut s = format!("{} texels, {} steps, {w}x{h}", self.texels, self.ray_steps);
+        if let Some(v) = self.voxel_mm {
+            let _ = write!(s, ", mesh {v} mm");
+        }
+        s
+    }
+}
+
+fn scaled_size(sensor: &Sensor, scale: f64) -> (u32, u32) {
+    (
+        ((sensor.width as f64 * scale).round() as u32).max(1),
+        ((sensor.height as f64 * scale).round() as u32).max(1),
+    )
+}
+
+/// The configurations a run measures: the default and each knob turned down and up on its
+/// own (`full`: every texels x steps pair as well).
+pub fn configurations(sensor: &Sensor, full: bool) -> Vec<Knobs> {
+    let d = Knobs::default_for(sensor);
+    let mut out = vec![d];
+    let mut push = |k: Knobs| {
+        if !out.contains(&k) {
+            out.push(k);
+        }
+    };
+    for texels in [128, 512] {
+        push(Knobs { texels, ..d });
+    }
+    for ray_steps in [4, 16] {
+        push(Knobs { ray_steps, ..d });
+    }
+    push(Knobs {
+        image_scale: 0.5,
+        ..d
+    });
+    for v in [0.5, MESH_VOXEL_MM] {
+        push(Knobs {
+            voxel_mm: Some(v),
+            ..d
+        });
+    }
+    if full {
+        for texels in [128, 192, 256, 384, 512] {
+            for ray_steps in [4, 8, 16, 32] {
+                push(Knobs {
+                    texels,
+                    ray_steps,
+                    ..d
+                });
+            }
+        }
+        push(Knobs {
+            image_scale: 0.75,
+            ..d
+        });
+        push(Knobs {
+            voxel_mm: Some(0.125),
+            ..d
+        });
+    }
+    out
+}
+
+/// What one configuration measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub knobs: Knobs,
+    pub label: String,
+    pub is_default: bool,
+    pub fps: f64,
+    /// Mean absolute 8-bit difference against the reference.
+    pub image_error: f64,
+    /// Surface detector's mean error (mm) over the detected contacts.
+    pub localisation_error_mm: Option<f64>,
+    pub missed: usize,
+    /// Contacts rendered.
+    pub contacts: usize,
+    pub on_front_image: bool,
+    pub on_front_localisation: bool,
+}
+
+/// Marks the Pareto front of (speed, error) points, speed to maximise and error to
+/// minimise: `true` where no other point has speed >= and error <=, one strictly. Points
+/// with a non-finite coordinate are never on the front and dominate nothing.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
+    let ok = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    points
+        .iter()
+        .map(|p| {
+            ok(p)
+                && !points
+                    .iter()
+                    .any(|q| ok(q) && q.0 >= p.0 && q.1 <= p.1 && (q.0 > p.0 || q.1 < p.1))
+        })
+        .collect()
+}
+
+/// The contacts: one per tap position of the paper, each with another solid (all eight), or
+/// every other one of them (four: tip, 45°, junction, 10 mm down) for a quick run.
+pub fn contacts(all: bool) -> Vec<Contact> {
+    (0..experiment::POSITIONS.len())
+        .filter(|i| all || i % 2 == 0)
+        .map(|i| {
+            experiment::taps(Solid::ALL[i % Solid::ALL.len()], &Protocol::default())[i].clone()
+        })
+        .collect()
+}
+
+/// A variant of `sensor` with the knobs' render settings and image size (the lens scaled
+/// with the image so it sees the same finger).
+pub fn sensor_for(sensor: &Sensor, knobs: &Knobs) -> Result<Sensor> {
+    let mut c = sensor.config.clone();
+    c.render.heightfield_texels = knobs.texels;
+    c.render.ray_steps = knobs.ray_steps;
+    c.render.noise = 0.0;
+    if knobs.image_scale != 1.0 {
+        if !(knobs.image_scale.is_finite() && knobs.image_scale > 0.0) {
+            return Err(GeltipError::input(
+                "image scale",
+                format!("must be a positive number, got {}", knobs.image_scale),
+            ));
+        }
+        let (w, h) = scaled_size(sensor, knobs.image_scale);
+        let sx = w as f64 / sensor.width as f64;
+        c.image.width = w;
+        c.image.height = h;
+        c.lens.focal_px *= sx;
+        c.lens.cx *= sx;
+        c.lens.cy *= h as f64 / sensor.height as f64;
+    }
+    Sensor::from_config(format!("{} [{}]", sensor.name, knobs.label(sensor)), c)
+}
+
+/// The contacts with their solids baked into meshes on voxels of `voxel_mm`.
+fn as_meshes(list: &[Contact], voxel_mm: f64) -> Result<Vec<Contact>> {
+    let mut baked: HashMap<String, Arc<Object>> = HashMap::new();
+    list.iter()
+        .map(|c| {
+            let solid = c.object.solid().ok_or_else(|| {
+                GeltipError::input("tradeoff", "the contacts must be built-in solids")
+            })?;
+            let object = match baked.get(solid.name()) {
+                Some(o) => o.clone(),
+                None => {
+                    let mesh = solid.mesh().placed_for_contact();
+                    let grid = SdfGrid::bake_padded(&mesh, voxel_mm, MESH_PAD_MM)?;
+                    let o = Arc::new(Object::Mesh {
+                        name: solid.name().to_string(),
+                        mesh,
+                        grid,
+                    });
+                    baked.insert(solid.name().to_string(), o.clone());
+                    o
+                }
+            };
+            Ok(Contact {
+                object,
+                ..c.clone()
+            })
+        })
+        .collect()
+}
+
+/// Mean absolute 8-bit channel difference between `a` and `b` over the pixels where either
+/// differs from its reference.
+pub fn image_error(a: &Frame, a_ref: &Frame, b: &Frame, b_ref: &Frame) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in 0..(a.width * a.height) as usize {
+        let changed = (0..3).any(|c| {
+            a.rgba[i * 4 + c] != a_ref.rgba[i * 4 + c] || b.rgba[i * 4 + c] != b_ref.rgba[i * 4 + c]
+        });
+        if changed {
+            for c in 0..3 {
+                sum += a.rgba[i * 4 + c].abs_diff(b.rgba[i * 4 + c]) as f64;
+            }
+            n += 3;
+        }
+    }
+    sum / n.max(1) as f64
+}
+
+/// Heightfield texels of the high-resolution reference.
+pub const REFERENCE_TEXELS: u32 = 768;
+/// Ray steps of the high-resolution reference.
+pub const REFERENCE_STEPS: u32 = 32;
+
+/// The full report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    pub sensor: String,
+    pub adapter: String,
+    pub rows: Vec<Row>,
+}
+
+/// Measures every configuration. `rounds` speed rounds each (median taken); `progress` gets
+/// each configuration's label when it is done.
+pub fn run(
+    sensor: &Sensor,
+    configs: &[Knobs],
+    list: &[Contact],
+    rounds: usize,
+    out: Option<&Path>,
+    mut progress: impl FnMut(&str),
+) -> Result<Report> {
+    if configs.is_empty() || rounds == 0 || list.is_empty() {
+        return Err(GeltipError::input(
+            "tradeoff",
+            "needs at least one configuration, one contact and one speed round",
+        ));
+    }
+    // High-resolution references, one per image size.
+    let mut references: Vec<(u32, u32, Frame, Vec<Frame>)> = Vec::new();
+    let mut adapter = String::new();
+    let mut rows = Vec::new();
+    let default = Knobs::default_for(sensor);
+    for knobs in configs {
+        let t0 = Instant::now();
+        let variant = sensor_for(sensor, knobs)?;
+        let (w, h) = (variant.width, variant.height);
+        if !references.iter().any(|r| r.0 == w && r.1 == h) {
+            let best = sensor_for(
+                sensor,
+                &Knobs {
+                    texels: REFERENCE_TEXELS,
+                    ray_steps: REFERENCE_STEPS,
+                    voxel_mm: None,
+                    ..*knobs
+                },
+            )?;
+            let mut r = Renderer::new(&best)?;
+            adapter = r.adapter().name.clone();
+            // One contact per submit: a batch of high-resolution renders can outlast the GPU
+            // watchdog on a software rasteriser.
+            let frames = list
+                .iter()
+                .map(|c| r.render(c).map(|(f, _)| f))
+                .collect::<Result<Vec<_>>>()?;
+            references.push((w, h, r.reference().clone(), frames));
+        }
+        let (_, _, ref_empty, ref_frames) = references
+            .iter()
+            .find(|r| r.0 == w && r.1 == h)
+            .expect("reference rendered above");
+        log::info!(
+            "{}: reference ready after {:.1} s",
+            knobs.label(sensor),
+            t0.elapsed().as_secs_f64()
+        );
+        let scene = match knobs.voxel_mm {
+            Some(v) => as_meshes(list, v)?,
+            None => list.to_vec(),
+        };
+        let mut renderer = Renderer::new(&variant)?;
+        let localiser = Localiser::new(&variant);
+        let reference_rgb = renderer.reference().to_rgb();
+        let (mut img_err, mut loc_sum, mut found) = (0.0, 0.0, 0usize);
+        for (c, t) in scene.iter().zip(ref_frames) {
+            let (f, truth): (Frame, GroundTruth) = renderer.render(c)?;
+            img_err += image_error(&f, renderer.reference(), t, ref_empty) / scene.len() as f64;
+            let d = localiser.localise(&reference_rgb, &f.to_rgb(), Method::Surface)?;
+            if let (true, Some(p)) = (d.detected, d.point) {
+                loc_sum += (p - truth.point).length();
+                found += 1;
+            }
+        }
+        log::info!(
+            "{}: accuracy done after {:.1} s",
+            knobs.label(sensor),
+            t0.elapsed().as_secs_f64()
+        );
+        let mut rates = Vec::new();
+        for _ in 0..rounds {
+            let start = Instant::now();
+            for c in &scene {
+                renderer.render(c)?;
+            }
+            rates.push(scene.len() as f64 / start.elapsed().as_secs_f64());
+        }
+        rates.sort_by(f64::total_cmp);
+        let label = knobs.label(sensor);
+        rows.push(Row {
+            knobs: *knobs,
+            label: label.clone(),
+            is_default: *knobs == default,
+            fps: rates[rates.len() / 2],
+            image_error: img_err,
+            localisation_error_mm: (found > 0).then(|| loc_sum / found as f64),
+            missed: scene.len() - found,
+            contacts: scene.len(),
+            on_front_image: false,
+            on_front_localisation: false,
+        });
+        progress(&label);
+    }
+    let front_img = pareto_front(
+        &rows
+            .iter()
+            .map(|r| (r.fps, r.image_error))
+            .collect::<Vec<_>>(),
+    );
+    // A configuration that misses contacts is scored as if each miss were 10 mm off.
+    let loc_points: Vec<(f64, f64)> = rows.iter().map(|r| (r.fps, loc_score(r))).collect();
+    let front_loc = pareto_front(&loc_points);
+    for (i, r) in rows.iter_mut().enumerate() {
+        r.on_front_image = front_img[i];
+        r.on_front_localisation = front_loc[i];
+    }
+    let report = Report {
+        sensor: sensor.name.clone(),
+        adapter,
+        rows,
+    };
+    if let Some(dir) = out {
+        output::write_atomic(dir.join("tradeoff.md"), report.markdown().as_bytes())?;
+        output::write_atomic(dir.join("tradeoff.csv"), report.csv().as_bytes())?;
+        output::write_atomic(dir.join("tradeoff.svg"), report.chart()?.as_bytes())?;
+    }
+    Ok(report)
+}
+
+/// Localisation score of a row: mean error over all contacts, a miss counting 10 mm.
+pub fn loc_score(r: &Row) -> f64 {
+    let detected = r.contacts.saturating_sub(r.missed);
+    let sum = r.localisation_error_mm.unwrap_or(0.0) * detected as f64 + 10.0 * r.missed as f64;
+    sum / r.contacts.max(1) as f64
+}
+
+impl Report {
+    /// The default's row.
+    pub fn default_row(&self) -> Option<&Row> {
+        self.rows.iter().find(|r| r.is_default)
+    }
+
+    /// The table, Markdown, with a sentence on the default.
+    pub fn markdown(&self) -> String {
+        let mut md = format!(
+            "Sensor `{}`, adapter {}, {} contacts. Image error: mean |Δ| (8-bit levels) against {} texels / {} steps / analytic solids at the same image size. Localisation: surface detector, mean error (mm) of detected contacts. Front: on the Pareto front of fps against that error.\n\n| configuration | fps | image error | front (image) | localisation error (mm) | missed | front (localisation) |\n|---|---|---|---|---|---|---|\n",
+            self.sensor, self.adapter, self.rows.first().map_or(0, |r| r.contacts), REFERENCE_TEXELS, REFERENCE_STEPS
+        );
+        for r in &self.rows {
+            let _ = writeln!(
+                md,
+                "| {}{} | {:.1} | {:.2} | {} | {} | {} | {} |",
+                r.label,
+                if r.is_default { " (default)" } else { "" },
+                r.fps,
+                r.image_error,
+                if r.on_front_image { "yes" } else { "" },
+                r.localisation_error_mm
+                    .map_or("—".into(), |e| format!("{e:.3}")),
+                r.missed,
+                if r.on_front_localisation { "yes" } else { "" },
+            );
+        }
+        if let Some(d) = self.default_row() {
+            let _ = writeln!(
+                md,
+                "\nThe default is {} the image-error front and {} the localisation front.",
+                if d.on_front_image { "on" } else { "NOT on" },
+                if d.on_front_localisation {
+                    "on"
+                } else {
+                    "NOT on"
+                }
+            );
+        }
+        md
+    }
+
+    /// The table, CSV.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from("texels,ray_steps,image_scale,voxel_mm,default,fps,image_error,front_image,localisation_error_mm,missed,front_localisation\n");
+        for r in &self.rows {
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},{},{},{},{},{},{},{}",
+                r.knobs.texels,
+                r.knobs.ray_steps,
+                r.knobs.image_scale,
+                r.knobs.voxel_mm.map(|v| v.to_string()).unwrap_or_default(),
+                r.is_default,
+                r.fps,
+                r.image_error,
+                r.on_front_image,
+                r.localisation_error_mm
+                    .map(|e| e.to_string())
+                    .unwrap_or_default(),
+                r.missed,
+                r.on_front_localisation
+            );
+        }
+        csv
+    }
+
+    /// Two Pareto charts side by side (fps against image error, fps against localisation
+    /// error), the front drawn as a step line, the default ringed, every point labelled.
+    pub fn chart(&self) -> Result<String> {
+        use plotters::prelude::*;
+        let max_fps = self.rows.iter().map(|r| r.fps).fold(1.0, f64::max) * 1.15;
+        type Get = fn(&Row) -> (f64, bool);
+        let panels: [(&str, &str, Get); 2] = [
+            (
+                "image error vs reference",
+                "mean |Δ| (8-bit levels)",
+                |r| (r.image_error, r.on_front_image),
+            ),
+            (
+                "surface detector error",
+                "mean error (mm; a miss counts 10 mm)",
+                |r| (loc_score(r), r.on_front_localisation),
+            ),
+        ];
+        plot::svg("tradeoff", (1100, 480), |root| {
+            let areas = root.split_evenly((1, 2));
+            for (area, (title, ydesc, get)) in areas.iter().zip(panels) {
+                let top = self.rows.iter().map(|r| get(r).0).fold(0.01, f64::max) * 1.15;
+                let mut chart = ChartBuilder::on(area)
+                    .caption(title, ("sans-serif", 16))
+                    .margin(12)
+                    .x_label_area_size(40)
+                    .y_label_area_size(55)
+                    .build_cartesian_2d(0f64..max_fps, 0f64..top)?;
+                chart
+                    .configure_mesh()
+                    .x_desc("frames per second (one contact per submit)")
+                    .y_desc(ydesc)
+                    .draw()?;
+                let mut front: Vec<(f64, f64)> = self
+                    .rows
+                    .iter()
+                    .filter(|r| get(r).1)
+                    .map(|r| (r.fps, get(r).0))
+                    .collect();
+                front.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut steps = Vec::new();
+                for (i, p) in front.iter().enumerate() {
+                    if i > 0 {
+                        steps.push((front[i - 1].0, p.1));
+                    }
+                    steps.push(*p);
+                }
+                let c0 = plot::colour(0);
+                chart
+                    .draw_series(LineSeries::new(steps, c0.stroke_width(2)))?
+                    .label("Pareto front")
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], c0.stroke_width(2))
+                    });
+                let c1 = plot::colour(1);
+                chart.draw_series(self.rows.iter().map(|r| {
+                    let (e, on) = get(r);
+                    let style = if on { c0.filled() } else { c1.filled() };
+                    Circle::new((r.fps, e), 4, style)
+                }))?;
+                if let Some(d) = self.default_row() {
+                    chart
+                        .draw_series(std::iter::once(Circle::new(
+                            (d.fps, get(d).0),
+                            9,
+                            BLACK.stroke_width(2),
+                        )))?
+                        .label("default")
+                        .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.stroke_width(2)));
+                }
+                for r in &self.rows {
+                    let mut short = format!("{}t/{}s", r.knobs.texels, r.knobs.ray_steps);
+                    if r.knobs.image_scale != 1.0 {
+                        let _ = write!(short, " x{}", r.knobs.image_scale);
+                    }
+                    if let Some(v) = r.knobs.voxel_mm {
+                        let _ = write!(short, " mesh {v}");
+                    }
+                    chart.draw_series(std::iter::once(Text::new(
+                        short,
+                        (r.fps, get(r).0),
+                        ("sans-serif", 10),
+                    )))?;
+                }
+                chart
+                    .configure_series_labels()
+                    .border_style(BLACK)
+                    .background_style(WHITE.mix(0.9))
+                    .position(SeriesLabelPosition::UpperRight)
+                    .draw()?;
+            }
+            Ok(())
+        })
+    }
+}
