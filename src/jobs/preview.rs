@@ -366,7 +366,7 @@ pub fn resolution_chart(rows: &[(Sensor, Preview)], title: &str) -> Result<Strin
                 p.curve.iter().map(|r| (r.s, r.parallel)),
                 6,
                 4,
-                c.stroke_width(1).into(),
+                c.stroke_width(1),
             ))?;
             let sj = sensor.finger.junction_s();
             chart.draw_series(std::iter::once(PathElement::new(
@@ -416,7 +416,8 @@ pub fn sweep_chart(rows: &[(Sensor, Preview)], fovs: &[f64]) -> Result<String> {
             .y_label_area_size(45)
             .build_cartesian_2d(x0..x1, 0f64..s_top * 1.05)?;
         a.configure_mesh().x_desc("field of view (°)").draw()?;
-        let series: [(&str, usize, fn(&Preview) -> f64); 2] = [
+        type Series<'a> = (&'a str, usize, fn(&Preview) -> f64);
+        let series: [Series; 2] = [
             ("all round", 0, |p| p.visible_s_all_round),
             ("farthest meridian", 1, |p| p.visible_s_max),
         ];

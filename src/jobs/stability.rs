@@ -104,7 +104,7 @@ pub struct Report {
     pub false_detections: Vec<(bool, Method, usize, usize)>,
     /// Per method: (pairs, pairs where something was detected, mean distance to the nearer
     /// of the two contacts).
-    pub two_contacts: Vec<(Method, usize, usize, Option<f64>)>,
+    pub two_contacts: TwoContactTrials,
 }
 
 /// The stand-in for multi-contact rendering (until the renderer draws several contacts in
@@ -356,6 +356,10 @@ pub fn run(
     Ok(report)
 }
 
+/// Per method: pairs, pairs where something was detected, mean distance (mm) to the
+/// nearer of the two contacts.
+type TwoContactTrials = Vec<(Method, usize, usize, Option<f64>)>;
+
 /// Pairs of single-contact frames (same arc length, azimuths half a turn apart where the
 /// sweep has them, else consecutive frames) composited by [`composite_two`].
 fn two_contact_trials(
@@ -363,7 +367,7 @@ fn two_contact_trials(
     reference: &RgbImage,
     frames: &[(RgbImage, GroundTruth)],
     sweep: &Sweep,
-) -> Result<Vec<(Method, usize, usize, Option<f64>)>> {
+) -> Result<TwoContactTrials> {
     let n = frames.len();
     let half = if sweep.azimuths >= 2 && n >= 2 {
         n / 2

@@ -155,10 +155,79 @@ impl SurfaceCache {
     }
 }
 
-/// The difference seen at one smoothing scale.
+/// A rectangle of pixels, `[x0, x1) x [y0, y1)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Window {
+    x0: usize,
+    y0: usize,
+    x1: usize,
+    y1: usize,
+}
+
+impl Window {
+    fn width(&self) -> usize {
+        self.x1 - self.x0
+    }
+
+    fn height(&self) -> usize {
+        self.y1 - self.y0
+    }
+
+    /// Grown by `by` pixels on every side, clipped to a `w` x `h` image.
+    fn grown(&self, by: usize, w: usize, h: usize) -> Window {
+        Window {
+            x0: self.x0.saturating_sub(by),
+            y0: self.y0.saturating_sub(by),
+            x1: (self.x1 + by).min(w),
+            y1: (self.y1 + by).min(h),
+        }
+    }
+
+    /// The image index of the `i`-th pixel of the window (row-major in the window).
+    fn image_index(&self, i: usize, image_width: usize) -> usize {
+        (self.y0 + i / self.width()) * image_width + self.x0 + i % self.width()
+    }
+}
+
+/// The bounding box of the pixels where `frame` differs from `reference` (RGB8, `w` wide),
+/// or `None` when they are identical.
+fn difference_box(reference: &[u8], frame: &[u8], w: usize) -> Option<Window> {
+    let row_bytes = 3 * w;
+    let mut bbox: Option<Window> = None;
+    for (y, (a, b)) in reference
+        .chunks_exact(row_bytes)
+        .zip(frame.chunks_exact(row_bytes))
+        .enumerate()
+    {
+        if a == b {
+            continue;
+        }
+        let first = a.iter().zip(b).position(|(p, q)| p != q).unwrap_or(0) / 3;
+        let last = a.iter().zip(b).rposition(|(p, q)| p != q).unwrap_or(0) / 3;
+        bbox = Some(match bbox {
+            None => Window {
+                x0: first,
+                y0: y,
+                x1: last + 1,
+                y1: y + 1,
+            },
+            Some(r) => Window {
+                x0: r.x0.min(first),
+                y0: r.y0,
+                x1: r.x1.max(last + 1),
+                y1: y + 1,
+            },
+        });
+    }
+    bbox
+}
+
+/// The difference seen at one smoothing scale, over `window` (zero outside it).
 struct Scale {
     size: usize,
-    /// Row-major norm of the smoothed signed difference (0 where the pixel sees no finger).
+    window: Window,
+    /// Row-major (in the window) norm of the smoothed signed difference (0 where the pixel
+    /// sees no finger).
     magnitude: Vec<f64>,
     /// RMS of that norm under noise alone.
     sigma: f64,
@@ -166,6 +235,7 @@ struct Scale {
     detect_level: f64,
 }
 
+/// Over the whole frame: the noise estimated from every pixel that sees the finger.
 fn analyse_scale(
     signed: &FloatImage,
     cache: &SurfaceCache,
@@ -191,11 +261,96 @@ fn analyse_scale(
     }
     Scale {
         size,
+        window: Window {
+            x0: 0,
+            y0: 0,
+            x1: signed.width as usize,
+            y1: signed.height as usize,
+        },
         magnitude,
         sigma,
         peak,
         detect_level: (config.detect_snr * sigma).max(config.min_peak),
     }
+}
+
+/// Over the difference's footprint only, for a frame that equals the reference outside
+/// `bbox` (no sensor noise): the same numbers as [`analyse_scale`], at a fraction of the
+/// cost. The smoothed difference is exactly 0 farther than `size / 2` from `bbox` (the
+/// differences are whole grey levels, so the box sums are exact), so only the window
+/// `bbox` grown by `size / 2` can be non-zero; it is filtered from a crop grown by `size`
+/// (whose edges are the image's wherever the window's window reaches them, so the mirrored
+/// border samples are the same). When more than half of the pixels that see the finger lie
+/// outside the window, the median of each channel and of its absolute deviations is 0, so
+/// the robust noise is 0 and `sigma` is the floor. The caller checks that condition.
+fn analyse_footprint(
+    reference: &RgbImage,
+    frame: &RgbImage,
+    bbox: Window,
+    cache: &SurfaceCache,
+    size: usize,
+    config: &SurfaceConfig,
+) -> Scale {
+    let (w, h) = (frame.width() as usize, frame.height() as usize);
+    let half = (size.max(1) | 1) / 2;
+    let window = bbox.grown(half, w, h);
+    let crop = bbox.grown(2 * half, w, h);
+    let (a, b) = (reference.as_raw(), frame.as_raw());
+    let mut data = Vec::with_capacity(crop.width() * crop.height() * 3);
+    for y in crop.y0..crop.y1 {
+        let row = (y * w + crop.x0) * 3..(y * w + crop.x1) * 3;
+        data.extend(
+            a[row.clone()]
+                .iter()
+                .zip(&b[row])
+                .map(|(&p, &q)| q as f64 - p as f64),
+        );
+    }
+    let signed = FloatImage {
+        width: crop.width() as u32,
+        height: crop.height() as u32,
+        channels: 3,
+        data,
+    };
+    let smooth = mean_filter(&signed, size);
+    let sigma = NOISE_FLOOR;
+    let mut magnitude = vec![0.0; window.width() * window.height()];
+    let mut peak = 0.0f64;
+    for (k, m) in magnitude.iter_mut().enumerate() {
+        let i = window.image_index(k, w);
+        if cache.areas[i] <= 0.0 {
+            continue;
+        }
+        let (x, y) = (
+            window.x0 + k % window.width(),
+            window.y0 + k / window.width(),
+        );
+        let c = (y - crop.y0) * crop.width() + (x - crop.x0);
+        *m = smooth.pixel(c).iter().map(|v| v * v).sum::<f64>().sqrt();
+        peak = peak.max(*m);
+    }
+    Scale {
+        size,
+        window,
+        magnitude,
+        sigma,
+        peak,
+        detect_level: (config.detect_snr * sigma).max(config.min_peak),
+    }
+}
+
+/// Whether more than half of the pixels that see the finger lie outside `window`.
+fn mostly_outside(cache: &SurfaceCache, window: Window) -> bool {
+    let w = cache.width as usize;
+    let inside: usize = (window.y0..window.y1)
+        .map(|y| {
+            cache.areas[y * w + window.x0..y * w + window.x1]
+                .iter()
+                .filter(|&&a| a > 0.0)
+                .count()
+        })
+        .sum();
+    2 * (cache.valid.len() - inside) > cache.valid.len()
 }
 
 /// One candidate region: its component, surface area, area-weighted sum of points and
@@ -223,6 +378,19 @@ pub fn detect(
     reference: &RgbImage,
     frame: &RgbImage,
 ) -> Result<Detection> {
+    detect_with(sensor, cache, config, reference, frame, true)
+}
+
+/// [`detect`], optionally never taking the footprint shortcut (to check that it changes
+/// nothing).
+fn detect_with(
+    sensor: &Sensor,
+    cache: &SurfaceCache,
+    config: &SurfaceConfig,
+    reference: &RgbImage,
+    frame: &RgbImage,
+    allow_footprint: bool,
+) -> Result<Detection> {
     check_sizes(reference, frame, Some(sensor))?;
     if cache.areas.len() != frame.as_raw().len() / 3 {
         return Err(crate::error::GeltipError::input(
@@ -237,7 +405,18 @@ pub fn detect(
         ));
     }
     let (w, h) = (sensor.width, sensor.height);
-    let signed = FloatImage {
+    let Some(bbox) = difference_box(reference.as_raw(), frame.as_raw(), w as usize) else {
+        return Ok(Detection::none(
+            0,
+            "the frame does not differ from the reference",
+        ));
+    };
+    // Noise-free frames differ only around the contact: work on that footprint when the
+    // noise estimate is known to be the floor there (see `analyse_footprint`).
+    let largest = config.scales.iter().copied().max().unwrap_or(1).max(1) | 1;
+    let footprint =
+        allow_footprint && mostly_outside(cache, bbox.grown(largest / 2, w as usize, h as usize));
+    let signed = (!footprint).then(|| FloatImage {
         width: w,
         height: h,
         channels: 3,
@@ -247,19 +426,16 @@ pub fn detect(
             .zip(frame.as_raw())
             .map(|(&a, &b)| b as f64 - a as f64)
             .collect(),
-    };
-    if signed.data.iter().all(|&v| v == 0.0) {
-        return Ok(Detection::none(
-            0,
-            "the frame does not differ from the reference",
-        ));
-    }
+    });
 
     // Detection: the finest scale at which the contact clears the level, else the one
     // that came closest (for the note).
     let mut best: Option<Scale> = None;
     for &size in &config.scales {
-        let scale = analyse_scale(&signed, cache, size, config);
+        let scale = match &signed {
+            Some(signed) => analyse_scale(signed, cache, size, config),
+            None => analyse_footprint(reference, frame, bbox, cache, size, config),
+        };
         let passes = scale.peak >= scale.detect_level;
         let closer = best
             .as_ref()
@@ -276,6 +452,7 @@ pub fn detect(
     };
     let Scale {
         size,
+        window,
         magnitude,
         sigma,
         peak,
@@ -294,7 +471,13 @@ pub fn detect(
     // Support and candidate regions.
     let support = (config.support_snr * sigma).max(config.relative_threshold * peak);
     let mask: Vec<bool> = magnitude.iter().map(|&m| m > support).collect();
-    let (comps, _) = components(&mask, w, h);
+    let (mut comps, _) = components(&mask, window.width() as u32, window.height() as u32);
+    // Window indices to image indices (monotone: raster order is kept).
+    for pixels in &mut comps {
+        for i in pixels.iter_mut() {
+            *i = window.image_index(*i, w as usize);
+        }
+    }
     let mut candidates: Vec<Candidate> = comps
         .iter()
         .enumerate()
@@ -388,4 +571,117 @@ pub fn detect(
             "the imprint reaches the edge of the field of view: its centre may be pulled towards the visible part".to_string()
         }),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A smooth reference and a frame with a bump (and optional extra specks) added.
+    fn frames(
+        cx: f64,
+        cy: f64,
+        radius: f64,
+        amp: f64,
+        specks: &[(u32, u32)],
+    ) -> (RgbImage, RgbImage) {
+        let (w, h) = (640u32, 480u32);
+        let reference = RgbImage::from_fn(w, h, |u, v| {
+            image::Rgb([(60 + u / 8) as u8, (80 + v / 8) as u8, 120])
+        });
+        let mut frame = reference.clone();
+        for (u, v, p) in frame.enumerate_pixels_mut() {
+            let d2 = (u as f64 - cx).powi(2) + (v as f64 - cy).powi(2);
+            let bump = amp * (-d2 / (2.0 * radius * radius)).exp();
+            p.0[0] = (p.0[0] as f64 + bump).round().clamp(0.0, 255.0) as u8;
+            p.0[1] = (p.0[1] as f64 - 0.5 * bump).round().clamp(0.0, 255.0) as u8;
+        }
+        for &(u, v) in specks {
+            frame.get_pixel_mut(u, v).0[2] = 200;
+        }
+        (reference, frame)
+    }
+
+    #[test]
+    fn the_footprint_shortcut_changes_nothing() {
+        let sensor = Sensor::preset("paper").unwrap();
+        let cache = SurfaceCache::new(&sensor);
+        let config = SurfaceConfig::default();
+        let cases = [
+            (320.0, 240.0, 6.0, 40.0, vec![]),
+            (100.0, 240.0, 10.0, 3.0, vec![]),
+            (540.0, 30.0, 4.0, 80.0, vec![]),
+            (300.0, 200.0, 5.0, 30.0, vec![(310, 215), (40, 240)]),
+            (60.0, 240.0, 30.0, 1.2, vec![]),
+            // The image's corner sees no finger; a bump on the border of the view.
+            (320.0, 2.0, 8.0, 25.0, vec![]),
+        ];
+        let mut shortcut_taken = 0;
+        for (cx, cy, r, amp, specks) in cases {
+            let (reference, frame) = frames(cx, cy, r, amp, &specks);
+            let fast = detect_with(&sensor, &cache, &config, &reference, &frame, true).unwrap();
+            let full = detect_with(&sensor, &cache, &config, &reference, &frame, false).unwrap();
+            assert_eq!(
+                fast, full,
+                "bump at ({cx}, {cy}) radius {r} amplitude {amp}"
+            );
+            let bbox = difference_box(reference.as_raw(), frame.as_raw(), 640).unwrap();
+            if !mostly_outside(&cache, bbox.grown(12, 640, 480)) {
+                continue;
+            }
+            shortcut_taken += 1;
+            // Every scale's numbers, not only the outcome: bit for bit.
+            let signed = FloatImage {
+                width: 640,
+                height: 480,
+                channels: 3,
+                data: reference
+                    .as_raw()
+                    .iter()
+                    .zip(frame.as_raw())
+                    .map(|(&a, &b)| b as f64 - a as f64)
+                    .collect(),
+            };
+            for &size in &config.scales {
+                let full = analyse_scale(&signed, &cache, size, &config);
+                let part = analyse_footprint(&reference, &frame, bbox, &cache, size, &config);
+                assert_eq!(
+                    (part.sigma, part.peak),
+                    (full.sigma, full.peak),
+                    "size {size}"
+                );
+                let mut in_window = vec![false; full.magnitude.len()];
+                for (k, m) in part.magnitude.iter().enumerate() {
+                    let i = part.window.image_index(k, 640);
+                    in_window[i] = true;
+                    assert_eq!(*m, full.magnitude[i], "size {size}, pixel {i}");
+                }
+                for (i, m) in full.magnitude.iter().enumerate() {
+                    assert!(in_window[i] || *m == 0.0, "size {size}, pixel {i}: {m}");
+                }
+            }
+        }
+        assert!(
+            shortcut_taken >= 5,
+            "the shortcut was taken {shortcut_taken} times"
+        );
+    }
+
+    #[test]
+    fn difference_box_bounds_every_changed_pixel() {
+        let a = vec![7u8; 3 * 10 * 4];
+        let mut b = a.clone();
+        assert_eq!(difference_box(&a, &b, 10), None);
+        b[3 * (10 + 2) + 1] = 9; // (2, 1), green
+        b[3 * (3 * 10 + 7) + 2] = 0; // (7, 3), blue
+        assert_eq!(
+            difference_box(&a, &b, 10),
+            Some(Window {
+                x0: 2,
+                y0: 1,
+                x1: 8,
+                y1: 4
+            })
+        );
+    }
 }
