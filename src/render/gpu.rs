@@ -883,22 +883,7 @@ impl Renderer {
             .collect();
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
-            let (start, count) = self.changed_rows(p.pixel_rect);
-            let offset = slot as u64 * self.slot_bytes + start * 4;
-            encoder.copy_buffer_to_buffer(
-                &self.reference_image,
-                start * 4,
-                &self.image,
-                offset,
-                Some(count * 4),
-            );
-            encoder.clear_buffer(&self.indentation, offset, Some(count * 4));
-            // The list itself needs no clearing: only its first TOUCHED_COUNT words are read.
-            encoder.clear_buffer(
-                &self.counters,
-                slot as u64 * self.counter_bytes,
-                Some(COUNTER_HEADER_BYTES),
-            );
+            self.record_frame_start(&mut encoder, slot as u64, p.pixel_rect);
             if let Some(t) = p.texel_rect {
                 let region = self.dirty.map_or(t, |d| d.union(&t));
                 self.clear_heightfield(&mut encoder, Some(region));
@@ -950,6 +935,32 @@ impl Renderer {
         }
         timings.readback += rendered.elapsed();
         Ok(frames)
+    }
+
+    /// Frame `slot`'s start: the reference's pixels over the rows `pixel_rect` can change,
+    /// zero indentation there, and zero counters (the touched list itself needs no
+    /// clearing: only its first TOUCHED_COUNT words are read).
+    fn record_frame_start(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: u64,
+        pixel_rect: Option<Rect>,
+    ) {
+        let (start, count) = self.changed_rows(pixel_rect);
+        let offset = slot * self.slot_bytes + start * 4;
+        encoder.copy_buffer_to_buffer(
+            &self.reference_image,
+            start * 4,
+            &self.image,
+            offset,
+            Some(count * 4),
+        );
+        encoder.clear_buffer(&self.indentation, offset, Some(count * 4));
+        encoder.clear_buffer(
+            &self.counters,
+            slot * self.counter_bytes,
+            Some(COUNTER_HEADER_BYTES),
+        );
     }
 
     /// The pixels a contact frame can change, as (first pixel, pixels): the rows of its
@@ -1039,16 +1050,7 @@ impl Renderer {
                     continue;
                 }
                 Step::Clear => {
-                    let (start, count) = self.changed_rows(p.pixel_rect);
-                    encoder.copy_buffer_to_buffer(
-                        &self.reference_image,
-                        start * 4,
-                        &self.image,
-                        start * 4,
-                        Some(count * 4),
-                    );
-                    encoder.clear_buffer(&self.indentation, start * 4, Some(count * 4));
-                    encoder.clear_buffer(&self.counters, 0, Some(COUNTER_HEADER_BYTES));
+                    self.record_frame_start(&mut encoder, 0, p.pixel_rect);
                     if let Some(region) = region {
                         self.clear_heightfield(&mut encoder, Some(region));
                     }
@@ -1253,17 +1255,8 @@ impl Renderer {
         let whole_bind = self.bind_group(&whole_uniform, 0, None);
         // The rows the scene can change (every row with noise), as `run` does per contact.
         let pixel_span = pixel_pieces.iter().copied().reduce(|a, b| a.union(&b));
-        let (start, count) = self.changed_rows(pixel_span);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(
-            &self.reference_image,
-            start * 4,
-            &self.image,
-            start * 4,
-            Some(count * 4),
-        );
-        encoder.clear_buffer(&self.indentation, start * 4, Some(count * 4));
-        encoder.clear_buffer(&self.counters, 0, Some(COUNTER_HEADER_BYTES));
+        self.record_frame_start(&mut encoder, 0, pixel_span);
         if let Some(span) = texel_pieces.iter().copied().reduce(|a, b| a.union(&b)) {
             // The contact stage keeps the deepest penetration: it must start from zero, and
             // the maps must lose what the last frame left outside this one.
@@ -1312,7 +1305,9 @@ impl Renderer {
         self.ctx.submit_and_wait("rendering a scene", encoder)?;
         let rendered = Instant::now();
         timings.render = rendered - render_start;
-        let mut parts = self.read_frames(&[(start, count)])?.into_iter();
+        let mut parts = self
+            .read_frames(&[self.changed_rows(pixel_span)])?
+            .into_iter();
         let (Some(Part::Rgba(rgba)), Some(Part::Indentation(indentation)), Some(Part::Counters(c))) =
             (parts.next(), parts.next(), parts.next())
         else {
