@@ -86,4 +86,7 @@ fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
     // clears the heightfield first, so one object writes its own penetration).
     let idx = j * sensor.texels + i;
     penetration[idx] = max(penetration[idx], p);
+    // This object's own penetration, for its labels: `height` is free until the parallels
+    // pass writes it, and the renderer copies these rows out before then.
+    height[idx] = p;
 }

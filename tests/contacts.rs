@@ -436,3 +436,85 @@ fn untouchable_and_invisible_contacts_say_so() {
     assert!(frame.rgba == w.reference().rgba);
     assert_eq!(truths[0].mask_pixels, 0);
 }
+
+/// The labels the renderer reads back from the GPU's own penetration (each contact's field
+/// copied out before the elastomer reuses the buffer) equal the CPU's, computed from
+/// `contact::penetration_field` over the same texel rect: in a batch (each slot its own
+/// field), and in a scene of two presses at the same place (each label its own object's
+/// field, not the deeper one's).
+#[test]
+fn labels_from_the_gpu_field_match_the_cpu_field() {
+    let mut r = paper();
+    let sensor = r.sensor().clone();
+    let grid = *r.grid();
+    let n = grid.texels as usize;
+    let reach = geltip::render::elastomer::blend_reach_mm(&sensor.config.elastomer);
+    let cpu_labels = |p: &Press| {
+        let pose = p.pose(&sensor).unwrap();
+        let rect = contact::footprint(&sensor, &grid, &pose, &p.object, reach)
+            .unwrap()
+            .texels;
+        let field = contact::penetration_field(&sensor, &grid, &pose, &p.object, rect);
+        contact::indentation_labels(&sensor.finger, &grid, &field[rect.y as usize * n..], rect)
+    };
+    let check = |what: &str, t: &GroundTruth, p: &Press| {
+        let want = cpu_labels(p);
+        assert!(want.reached_mm > 0.1, "{what}: the CPU field is empty");
+        assert!(
+            (t.indentation_reached_mm - want.reached_mm).abs() < 1e-3,
+            "{what}: reached {} vs CPU {}",
+            t.indentation_reached_mm,
+            want.reached_mm
+        );
+        let centre = t.contact_centre.expect("a centre");
+        assert!(
+            (centre - want.centre.unwrap()).length() < 1e-2,
+            "{what}: centre {centre} vs CPU {}",
+            want.centre.unwrap()
+        );
+        let rel = (t.indented_area_mm2 - want.area_mm2).abs() / want.area_mm2;
+        assert!(
+            rel < 0.02,
+            "{what}: area {} vs CPU {}",
+            t.indented_area_mm2,
+            want.area_mm2
+        );
+    };
+    let contacts = [
+        press(Solid::Sphere, Place::Rotation(0.0), 0.0, 1.0),
+        press(Solid::Cone, Place::Rotation(60.0), 45.0, 0.8),
+        press(Solid::Slab, Place::Translation(10.0), 200.0, 0.6),
+    ];
+    let plain: Vec<geltip::render::Contact> = contacts
+        .iter()
+        .map(|p| {
+            let Hold::Surface {
+                place,
+                azimuth_deg,
+                spin_deg,
+                depth_mm,
+                ..
+            } = p.hold
+            else {
+                unreachable!()
+            };
+            geltip::render::Contact {
+                object: p.object.clone(),
+                place,
+                azimuth_deg,
+                spin_deg,
+                depth_mm,
+            }
+        })
+        .collect();
+    let batch = r.render_batch(&plain).unwrap();
+    for ((_, t), p) in batch.iter().zip(&contacts) {
+        check(&format!("batch {}", t.place), t, p);
+    }
+    let deep = press(Solid::Sphere, Place::Rotation(45.0), 90.0, 1.0);
+    let shallow = press(Solid::Sphere, Place::Rotation(45.0), 90.0, 0.5);
+    let (_, truths) = r.render_scene(&[deep.clone(), shallow.clone()]).unwrap();
+    check("scene, deep", &truths[0], &deep);
+    check("scene, shallow", &truths[1], &shallow);
+    assert!(truths[1].indentation_reached_mm < truths[0].indentation_reached_mm - 0.3);
+}

@@ -497,7 +497,9 @@ pub struct IndentationLabels {
     pub area_mm2: f64,
 }
 
-/// Labels of a penetration field over `rect` (see [`penetration_field`]).
+/// Labels of a penetration field over `rect`, given as `rect`'s rows of the grid: texel
+/// (i, j) at `field[(j - rect.y) * texels + i]` (the renderer reads back only those rows;
+/// pass `&whole[rect.y * texels..]` for a whole-grid field from [`penetration_field`]).
 pub fn indentation_labels(
     finger: &Finger,
     grid: &HeightfieldGrid,
@@ -510,7 +512,7 @@ pub fn indentation_labels(
     let (mut sum, mut weight, mut area) = (DVec3::ZERO, 0.0, 0.0);
     for j in rect.y..rect.y + rect.h {
         for i in rect.x..rect.x + rect.w {
-            let p = field[j as usize * n + i as usize] as f64;
+            let p = field[(j - rect.y) as usize * n + i as usize] as f64;
             if p <= super::MASK_THRESHOLD_MM {
                 continue;
             }

@@ -46,19 +46,38 @@ struct Pipelines {
 }
 
 /// A frame's data as read back (see [`Renderer::read_frames`]).
-enum Part {
-    Rgba(Vec<u8>),
-    Indentation(Vec<f32>),
-    Counters(Vec<u32>),
+struct FrameParts {
+    rgba: Vec<u8>,
+    indentation: Vec<f32>,
+    counters: Vec<u32>,
 }
 
-/// What the CPU prepared for one frame of a batch.
+/// One contact's penetration over its texel rect's rows, as read back.
+type PenetrationField = Vec<f32>;
+
+/// What [`Renderer::run`] gives back: each frame with how many texels its object pressed
+/// beyond the shell, and each contact's penetration field.
+struct Ran {
+    frames: Vec<(Frame, u32)>,
+    fields: Vec<PenetrationField>,
+}
+
+/// What the CPU prepared for one contact of a batch or a scene.
 struct Prepared {
     uniform: FrameUniform,
-    truth: GroundTruth,
+    press: Press,
+    pose: ContactPose,
     texel_rect: Option<Rect>,
     pixel_rect: Option<Rect>,
-    object: Arc<Object>,
+}
+
+impl Prepared {
+    /// Where this contact's own penetration goes in `penetration_fields` when it starts at
+    /// byte `offset`: (offset, bytes) of its texel rect's rows, or `None` without a rect.
+    fn field_range(&self, offset: u64, texels: u32) -> Option<(u64, u64)> {
+        self.texel_rect
+            .map(|t| (offset, t.h as u64 * texels as u64 * 4))
+    }
 }
 
 /// Seconds spent in each phase of the last batch.
@@ -85,6 +104,9 @@ pub struct Renderer {
     penetration: wgpu::Buffer,
     elastomer_scratch: wgpu::Buffer,
     height: wgpu::Buffer,
+    /// Each contact's own penetration over its texel rect's rows, copied out of `height`
+    /// right after its contact pass (the labels are computed from it: see `contact.wgsl`).
+    penetration_fields: wgpu::Buffer,
     /// The heightfield as the samplers read it: textures refreshed from the three buffers
     /// above after each stage that writes them (see `shaders/shared/common.wgsl`).
     maps: [MapTexture; 3],
@@ -345,6 +367,12 @@ impl Renderer {
             penetration: storage(ctx, "geltip penetration", texels * 4, none),
             elastomer_scratch: storage(ctx, "geltip elastomer scratch", texels * 16, none),
             height: storage(ctx, "geltip height", texels * 4, none),
+            penetration_fields: storage(
+                ctx,
+                "geltip contact penetration fields",
+                texels * 4 * MAX_BATCH as u64,
+                none,
+            ),
             maps: [
                 ("geltip penetration map", wgpu::TextureFormat::R32Float),
                 ("geltip elastomer map", wgpu::TextureFormat::Rgba32Float),
@@ -386,7 +414,7 @@ impl Renderer {
             reference_image: storage(ctx, "geltip reference", slot_bytes, none),
             staging: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("geltip batch readback"),
-                size: (2 * slot_bytes + COUNTER_HEADER_BYTES) * MAX_BATCH as u64,
+                size: (2 * slot_bytes + COUNTER_HEADER_BYTES + texels * 4) * MAX_BATCH as u64,
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -676,10 +704,67 @@ impl Renderer {
         bind: &wgpu::BindGroup,
         t: Rect,
         region: Rect,
+        field_offset: u64,
     ) {
-        for (_, pipeline, map) in self.heightfield_stages() {
+        for (k, (_, pipeline, map)) in self.heightfield_stages().into_iter().enumerate() {
             self.record_texels(encoder, bind, pipeline, map, t, region);
+            if k == 0 {
+                self.copy_field(encoder, t, field_offset);
+            }
         }
+    }
+
+    /// Copies the contact pass's own penetration (left in `height` over `t`'s rows) to byte
+    /// `offset` of `penetration_fields`, before the parallels pass overwrites it.
+    fn copy_field(&self, encoder: &mut wgpu::CommandEncoder, t: Rect, offset: u64) {
+        let row = self.grid.texels as u64 * 4;
+        encoder.copy_buffer_to_buffer(
+            &self.height,
+            t.y as u64 * row,
+            &self.penetration_fields,
+            offset,
+            Some(t.h as u64 * row),
+        );
+    }
+
+    /// Makes `penetration_fields` hold at least `bytes` (a scene may have many contacts).
+    fn reserve_fields(&mut self, bytes: u64) {
+        if self.penetration_fields.size() < bytes {
+            self.penetration_fields = storage(
+                self.ctx,
+                "geltip contact penetration fields",
+                bytes,
+                wgpu::BufferUsages::empty(),
+            );
+        }
+    }
+
+    /// Byte offsets in `penetration_fields` of each prepared contact's field, packed.
+    fn field_offsets(&self, prepared: &[Prepared]) -> (Vec<u64>, u64) {
+        let mut at = 0;
+        let offsets = prepared
+            .iter()
+            .map(|p| {
+                let here = at;
+                at += p.field_range(0, self.grid.texels).map_or(0, |r| r.1);
+                here
+            })
+            .collect();
+        (offsets, at)
+    }
+
+    /// The labels of each prepared contact from its penetration field as read back.
+    fn truths(&self, prepared: Vec<Prepared>, fields: Vec<Vec<f32>>) -> Vec<GroundTruth> {
+        prepared
+            .into_iter()
+            .zip(fields)
+            .map(|(p, field)| {
+                let labels = p.texel_rect.map(|rect| {
+                    contact::indentation_labels(&self.sensor.finger, &self.grid, &field, rect)
+                });
+                ground_truth(&self.sensor, &p.press, &p.pose, labels)
+            })
+            .collect()
     }
 
     /// The heightfield stages in order: name, pipeline, and the map its output refreshes.
@@ -785,13 +870,12 @@ impl Renderer {
             pixel_rect,
             noise_seed,
         );
-        let truth = ground_truth(sensor, &self.grid, press, &pose, texel_rect);
         Ok(Prepared {
             uniform,
-            truth,
+            press: press.clone(),
+            pose,
             texel_rect,
             pixel_rect,
-            object: press.object.clone(),
         })
     }
 
@@ -853,9 +937,11 @@ impl Renderer {
                 prepared.push(self.prepare(&Press::from(c), seed)?);
             }
             total.prepare += start.elapsed();
-            let frames = self.run(&prepared, &mut total)?;
-            for ((frame, over_pressed_texels), p) in frames.into_iter().zip(prepared) {
-                let mut truth = p.truth;
+            let Ran { frames, fields } = self.run(&prepared, &mut total)?;
+            let labelled = Instant::now();
+            let truths = self.truths(prepared, fields);
+            total.readback += labelled.elapsed();
+            for ((frame, over_pressed_texels), mut truth) in frames.into_iter().zip(truths) {
                 let (count, bbox) = frame.mask();
                 truth.mask_pixels = count;
                 truth.mask_bbox = bbox;
@@ -867,9 +953,16 @@ impl Renderer {
         Ok(out)
     }
 
-    /// Records and runs the prepared frames; returns each frame and its over-pressed texels.
-    fn run(&mut self, prepared: &[Prepared], timings: &mut Timings) -> Result<Vec<(Frame, u32)>> {
+    /// Records and runs the prepared frames; returns each frame with its over-pressed texels,
+    /// and each contact's own penetration over its texel rect's rows.
+    fn run(
+        &mut self,
+        prepared: &[Prepared],
+        timings: &mut Timings,
+    ) -> Result<Ran> {
         let start = Instant::now();
+        let (field_offsets, field_bytes) = self.field_offsets(prepared);
+        self.reserve_fields(field_bytes);
         let (w, h) = (self.sensor.width, self.sensor.height);
         let uniforms: Vec<wgpu::Buffer> = prepared
             .iter()
@@ -879,7 +972,7 @@ impl Renderer {
             .iter()
             .zip(&uniforms)
             .enumerate()
-            .map(|(slot, (p, u))| self.bind_group(u, slot as u64, Some(&p.object)))
+            .map(|(slot, (p, u))| self.bind_group(u, slot as u64, Some(&p.press.object)))
             .collect();
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
@@ -887,7 +980,7 @@ impl Renderer {
             if let Some(t) = p.texel_rect {
                 let region = self.dirty.map_or(t, |d| d.union(&t));
                 self.clear_heightfield(&mut encoder, Some(region));
-                self.record_heightfield(&mut encoder, bind, t, region);
+                self.record_heightfield(&mut encoder, bind, t, region, field_offsets[slot]);
                 self.dirty = Some(t);
             }
             if let Some(r) = p.pixel_rect {
@@ -909,20 +1002,21 @@ impl Renderer {
             .iter()
             .map(|p| self.changed_rows(p.pixel_rect))
             .collect();
-        let mut parts = self.read_frames(&rows)?.into_iter();
+        let field_ranges: Vec<Option<(u64, u64)>> = prepared
+            .iter()
+            .zip(&field_offsets)
+            .map(|(p, &at)| p.field_range(at, self.grid.texels))
+            .collect();
+        let (parts, fields) = self.read_frames(&rows, &field_ranges)?;
         let mut frames = Vec::with_capacity(prepared.len());
-        while let (
-            Some(Part::Rgba(rgba)),
-            Some(Part::Indentation(indentation)),
-            Some(Part::Counters(c)),
-        ) = (parts.next(), parts.next(), parts.next())
-        {
+        for part in parts {
+            let c = part.counters;
             timings.touched_pixels += c[TOUCHED_COUNT] as u64;
             let frame = Frame {
                 width: w,
                 height: h,
-                rgba,
-                indentation,
+                rgba: part.rgba,
+                indentation: part.indentation,
             };
             frames.push((frame, c[OVER_PRESSED]));
         }
@@ -934,7 +1028,7 @@ impl Renderer {
             )));
         }
         timings.readback += rendered.elapsed();
-        Ok(frames)
+        Ok(Ran { frames, fields })
     }
 
     /// Frame `slot`'s start: the reference's pixels over the rows `pixel_rect` can change,
@@ -976,9 +1070,21 @@ impl Renderer {
 
     /// One round trip for frames `0..rows.len()` of a batch: per frame, its image and its
     /// indentation (read over `rows`; the reference's image and zero elsewhere), and its
-    /// counters, in that order.
-    fn read_frames(&self, rows: &[(u64, u64)]) -> Result<Vec<Part>> {
-        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> = Vec::with_capacity(3 * rows.len());
+    /// counters; then the contacts' penetration fields over `fields` (byte ranges of
+    /// `penetration_fields`; an empty field for `None`).
+    fn read_frames(
+        &self,
+        rows: &[(u64, u64)],
+        fields: &[Option<(u64, u64)>],
+    ) -> Result<(Vec<FrameParts>, Vec<Vec<f32>>)> {
+        enum Part {
+            Rgba(Vec<u8>),
+            Indentation(Vec<f32>),
+            Counters(Vec<u32>),
+            Field(Vec<f32>),
+        }
+        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> =
+            Vec::with_capacity(3 * rows.len() + fields.len());
         for (k, &(start, count)) in rows.iter().enumerate() {
             let slot = k as u64 * self.slot_bytes;
             ranges.push((&self.image, slot + start * 4, count * 4));
@@ -989,8 +1095,15 @@ impl Renderer {
                 COUNTER_HEADER_BYTES,
             ));
         }
+        for &(offset, bytes) in fields.iter().map(|f| f.as_ref().unwrap_or(&(0, 0))) {
+            ranges.push((&self.penetration_fields, offset, bytes));
+        }
+        let frame_ranges = 3 * rows.len();
         let pixels = self.sensor.width as usize * self.sensor.height as usize;
-        read_ranges_with(self.ctx, Some(&self.staging), &ranges, |k, bytes| {
+        let parts = read_ranges_with(self.ctx, Some(&self.staging), &ranges, |k, bytes| {
+            if k >= frame_ranges {
+                return Part::Field(bytemuck::pod_collect_to_vec(bytes));
+            }
             let start = rows[k / 3].0 as usize;
             match k % 3 {
                 0 => {
@@ -1006,7 +1119,41 @@ impl Renderer {
                 }
                 _ => Part::Counters(bytemuck::pod_collect_to_vec(bytes)),
             }
-        })
+        })?;
+        let mut frames = Vec::with_capacity(rows.len());
+        let mut out_fields = Vec::with_capacity(fields.len());
+        let mut parts = parts.into_iter();
+        while frames.len() < rows.len() {
+            match (parts.next(), parts.next(), parts.next()) {
+                (
+                    Some(Part::Rgba(rgba)),
+                    Some(Part::Indentation(indentation)),
+                    Some(Part::Counters(counters)),
+                ) => frames.push(FrameParts {
+                    rgba,
+                    indentation,
+                    counters,
+                }),
+                _ => {
+                    return Err(GeltipError::Gpu(
+                        "a frame's readback is incomplete".to_string(),
+                    ))
+                }
+            }
+        }
+        for part in parts {
+            if let Part::Field(field) = part {
+                out_fields.push(field);
+            }
+        }
+        if out_fields.len() != fields.len() {
+            return Err(GeltipError::Gpu(format!(
+                "read back {} of {} penetration fields",
+                out_fields.len(),
+                fields.len()
+            )));
+        }
+        Ok((frames, out_fields))
     }
 
     /// Renders one contact stage by stage, waiting after each, and returns each stage's wall
@@ -1014,7 +1161,7 @@ impl Renderer {
     pub fn profile_stages(&mut self, contact: &Contact) -> Result<Vec<(&'static str, Duration)>> {
         let p = self.prepare(&Press::from(contact), 0)?;
         let uniform = self.uniform_buffer(&p.uniform);
-        let bind = self.bind_group(&uniform, 0, Some(&p.object));
+        let bind = self.bind_group(&uniform, 0, Some(&p.press.object));
         let region = match (self.dirty, p.texel_rect) {
             (Some(d), Some(t)) => Some(d.union(&t)),
             (d, t) => d.or(t),
@@ -1045,7 +1192,7 @@ impl Renderer {
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             match step {
                 Step::Readback => {
-                    self.read_frames(&[self.changed_rows(p.pixel_rect)])?;
+                    self.read_frames(&[self.changed_rows(p.pixel_rect)], &[])?;
                     out.push((name, start.elapsed()));
                     continue;
                 }
@@ -1058,6 +1205,9 @@ impl Renderer {
                 Step::Texels(pipeline, map) => {
                     if let (Some(t), Some(region)) = (p.texel_rect, region) {
                         self.record_texels(&mut encoder, &bind, pipeline, map, t, region);
+                        if matches!(map, Map::Penetration) {
+                            self.copy_field(&mut encoder, t, 0);
+                        }
                     }
                 }
                 Step::Select => {
@@ -1124,16 +1274,11 @@ impl Renderer {
 /// contact stage's penetration field; the mask and over-press are filled in after rendering.
 fn ground_truth(
     sensor: &Sensor,
-    grid: &HeightfieldGrid,
     press: &Press,
     pose: &ContactPose,
-    texel_rect: Option<Rect>,
+    labels: Option<contact::IndentationLabels>,
 ) -> GroundTruth {
     let f = &sensor.finger;
-    let labels = texel_rect.map(|rect| {
-        let field = contact::penetration_field(sensor, grid, pose, &press.object, rect);
-        contact::indentation_labels(f, grid, &field, rect)
-    });
     let (place, azimuth_deg, spin_deg, tilt_deg, tilt_towards_deg) = match press.hold {
         Hold::Surface {
             place,
@@ -1212,6 +1357,8 @@ impl Renderer {
             .iter()
             .map(|p| self.prepare(p, seed))
             .collect::<Result<_>>()?;
+        let (field_offsets, field_bytes) = self.field_offsets(&prepared);
+        self.reserve_fields(field_bytes);
         let texel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.texel_rect));
         let pixel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.pixel_rect));
         let mut timings = Timings {
@@ -1233,7 +1380,7 @@ impl Renderer {
         let contact_binds: Vec<wgpu::BindGroup> = prepared
             .iter()
             .zip(&contact_uniforms)
-            .map(|(p, u)| self.bind_group(u, 0, Some(&p.object)))
+            .map(|(p, u)| self.bind_group(u, 0, Some(&p.press.object)))
             .collect();
         let texel_uniforms: Vec<wgpu::Buffer> = texel_pieces
             .iter()
@@ -1264,10 +1411,12 @@ impl Renderer {
             self.clear_heightfield(&mut encoder, Some(region));
             for (k, (_, pipeline, map)) in self.heightfield_stages().into_iter().enumerate() {
                 if k == 0 {
-                    for (p, bind) in prepared.iter().zip(&contact_binds) {
+                    for ((p, bind), &at) in prepared.iter().zip(&contact_binds).zip(&field_offsets)
+                    {
                         if let Some(t) = p.texel_rect {
                             let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
                             Self::dispatch(&mut encoder, pipeline, bind, g);
+                            self.copy_field(&mut encoder, t, at);
                         }
                     }
                 } else {
@@ -1305,27 +1454,31 @@ impl Renderer {
         self.ctx.submit_and_wait("rendering a scene", encoder)?;
         let rendered = Instant::now();
         timings.render = rendered - render_start;
-        let mut parts = self
-            .read_frames(&[self.changed_rows(pixel_span)])?
-            .into_iter();
-        let (Some(Part::Rgba(rgba)), Some(Part::Indentation(indentation)), Some(Part::Counters(c))) =
-            (parts.next(), parts.next(), parts.next())
-        else {
+        let field_ranges: Vec<Option<(u64, u64)>> = prepared
+            .iter()
+            .zip(&field_offsets)
+            .map(|(p, &at)| p.field_range(at, self.grid.texels))
+            .collect();
+        let (parts, fields) = self.read_frames(&[self.changed_rows(pixel_span)], &field_ranges)?;
+        let Some(part) = parts.into_iter().next() else {
             return Err(GeltipError::Gpu("read back no scene frame".to_string()));
         };
+        let c = part.counters;
         timings.touched_pixels = c[TOUCHED_COUNT] as u64;
         let frame = Frame {
             width: w,
             height: h,
-            rgba,
-            indentation,
+            rgba: part.rgba,
+            indentation: part.indentation,
         };
         let over_pressed = c[OVER_PRESSED] > 0;
-        let truths = prepared
+        let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect).collect();
+        let truths = self
+            .truths(prepared, fields)
             .into_iter()
-            .map(|p| {
-                let mut truth = p.truth;
-                let (count, bbox) = p.pixel_rect.map_or((0, None), |r| frame.mask_in(r));
+            .zip(pixel_rects)
+            .map(|(mut truth, pixel_rect)| {
+                let (count, bbox) = pixel_rect.map_or((0, None), |r| frame.mask_in(r));
                 truth.mask_pixels = count;
                 truth.mask_bbox = bbox;
                 truth.over_pressed = over_pressed;
