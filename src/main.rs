@@ -634,7 +634,7 @@ fn run(cli: Cli) -> Result<()> {
             let sensor = Sensor::load(&sensor)?;
             let configs = tradeoff::configurations(&sensor, full);
             let bar = progress_bar("configurations")?;
-            bar.set_length(configs.len() as u64);
+            bar.set_length((configs.len() + rounds) as u64);
             let contacts = tradeoff::contacts(full);
             let report =
                 tradeoff::run(&sensor, &configs, &contacts, rounds, Some(&out), |label| {

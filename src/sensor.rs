@@ -142,6 +142,9 @@ pub struct RenderConfig {
     pub heightfield_texels: u32,
     /// March steps of each camera ray through the elastomer shell (then bisection).
     pub ray_steps: u32,
+    /// Spacing of the elastomer kernels' taps, in standard deviations of the narrow blend
+    /// (`elastomer.blend_mm`); never closer than one heightfield texel.
+    pub blend_tap_spacing: f64,
     /// Standard deviation of additive sensor noise, in 8-bit grey levels (0 = none).
     pub noise: f64,
     /// Seed of the noise; the same seed gives the same bytes.
@@ -153,6 +156,7 @@ impl Default for RenderConfig {
         RenderConfig {
             heightfield_texels: 256,
             ray_steps: 8,
+            blend_tap_spacing: 1.0,
             noise: 0.0,
             noise_seed: 0,
         }
@@ -382,6 +386,16 @@ impl SensorConfig {
             return Err(GeltipError::config(
                 "render.ray_steps",
                 format!("must be between 1 and 256, got {}", r.ray_steps),
+            ));
+        }
+        finite_positive("render.blend_tap_spacing", r.blend_tap_spacing)?;
+        if r.blend_tap_spacing > 6.0 {
+            return Err(GeltipError::config(
+                "render.blend_tap_spacing",
+                format!(
+                    "must be at most 6 (the kernels reach 6 blend_mm), got {}",
+                    r.blend_tap_spacing
+                ),
             ));
         }
         Ok(())

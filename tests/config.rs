@@ -103,6 +103,11 @@ fn other_impossible_values() {
     c.lens.model = geltip::LensModel::KannalaBrandt;
     c.lens.k = [-0.4, 0.0, 0.0, 0.0];
     assert_refused(c, "lens.k");
+    for spacing in [0.0, -1.0, f64::NAN, 6.5] {
+        let mut c = common::paper_config();
+        c.render.blend_tap_spacing = spacing;
+        assert_refused(c, "render.blend_tap_spacing");
+    }
 }
 
 #[test]

@@ -387,7 +387,8 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
     let sensor = sensor.clone();
     let grid = render::HeightfieldGrid::for_sensor(&sensor);
     let config = &sensor.config.elastomer;
-    let reach = elastomer::blend_reach_mm(config);
+    let kernel = elastomer::Kernel::for_config(&sensor.config, &grid);
+    let reach = kernel.reach_mm;
     let n = grid.texels;
     let whole = render::Rect {
         x: 0,
@@ -421,12 +422,12 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
                 w: (t.x + t.w + 30).min(n) - t.x.saturating_sub(30),
                 h: (t.y + t.h + 30).min(n) - t.y.saturating_sub(30),
             };
-            let meridian = elastomer::blend_meridian(&grid, config, reach, &p, grown);
+            let meridian = elastomer::blend_meridian(&grid, config, kernel, &p, grown);
             let (h, _) = elastomer::blend_azimuth(
                 &sensor.finger,
                 &grid,
                 config,
-                reach,
+                kernel,
                 &p,
                 &meridian,
                 grown,

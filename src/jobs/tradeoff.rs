@@ -32,6 +32,8 @@ use std::time::Instant;
 pub struct Knobs {
     pub texels: u32,
     pub ray_steps: u32,
+    /// The elastomer kernels' tap spacing, in narrow-blend standard deviations.
+    pub tap_spacing: f64,
     /// Image scale against the sensor's own size (1 = as configured, 0.5 = half each side).
     pub image_scale: f64,
     /// `None`: the analytic solids; `Some(v)`: the solids as meshes baked on voxels of v mm.
@@ -44,15 +46,19 @@ impl Knobs {
         Knobs {
             texels: sensor.config.render.heightfield_texels,
             ray_steps: sensor.config.render.ray_steps,
+            tap_spacing: sensor.config.render.blend_tap_spacing,
             image_scale: 1.0,
             voxel_mm: None,
         }
     }
 
-    /// "256 texels, 8 steps, 640x480, mesh 0.25 mm".
+    /// "256 texels, 8 steps, taps 1 sigma, 640x480, mesh 0.25 mm".
     pub fn label(&self, sensor: &Sensor) -> String {
         let (w, h) = scaled_size(sensor, self.image_scale);
-        let mut s = format!("{} texels, {} steps, {w}x{h}", self.texels, self.ray_steps);
+        let mut s = format!(
+            "{} texels, {} steps, taps {} sigma, {w}x{h}",
+            self.texels, self.ray_steps, self.tap_spacing
+        );
         if let Some(v) = self.voxel_mm {
             let _ = write!(s, ", mesh {v} mm");
         }
@@ -82,6 +88,9 @@ pub fn configurations(sensor: &Sensor, full: bool) -> Vec<Knobs> {
     }
     for ray_steps in [4, 16] {
         push(Knobs { ray_steps, ..d });
+    }
+    for tap_spacing in [0.5, 2.0] {
+        push(Knobs { tap_spacing, ..d });
     }
     push(Knobs {
         image_scale: 0.5,
@@ -166,6 +175,7 @@ pub fn sensor_for(sensor: &Sensor, knobs: &Knobs) -> Result<Sensor> {
     let mut c = sensor.config.clone();
     c.render.heightfield_texels = knobs.texels;
     c.render.ray_steps = knobs.ray_steps;
+    c.render.blend_tap_spacing = knobs.tap_spacing;
     c.render.noise = 0.0;
     if knobs.image_scale != 1.0 {
         if !(knobs.image_scale.is_finite() && knobs.image_scale > 0.0) {
@@ -237,6 +247,9 @@ pub fn image_error(a: &Frame, a_ref: &Frame, b: &Frame, b_ref: &Frame) -> f64 {
 pub const REFERENCE_TEXELS: u32 = 768;
 /// Ray steps of the high-resolution reference.
 pub const REFERENCE_STEPS: u32 = 32;
+/// Tap spacing of the high-resolution reference (narrow-blend standard deviations; its
+/// texels are finer still, so this is what it samples).
+pub const REFERENCE_TAP_SPACING: f64 = 0.25;
 
 /// The full report.
 #[derive(Debug, Clone, PartialEq)]
@@ -246,8 +259,10 @@ pub struct Report {
     pub rows: Vec<Row>,
 }
 
-/// Measures every configuration. `rounds` speed rounds each (median taken); `progress` gets
-/// each configuration's label when it is done.
+/// Measures every configuration: accuracy first, then `rounds` speed rounds that each time
+/// every configuration in turn (the median is kept). `progress` gets each configuration's
+/// label when its accuracy is measured, then "speed round k/n" after each round
+/// (`configs.len() + rounds` calls in all).
 pub fn run(
     sensor: &Sensor,
     configs: &[Knobs],
@@ -266,6 +281,8 @@ pub fn run(
     let mut references: Vec<(u32, u32, Frame, Vec<Frame>)> = Vec::new();
     let mut adapter = String::new();
     let mut rows = Vec::new();
+    // Each configuration's renderer and contacts, kept for the speed rounds.
+    let mut timed: Vec<(Renderer, Vec<Contact>)> = Vec::new();
     let default = Knobs::default_for(sensor);
     for knobs in configs {
         let t0 = Instant::now();
@@ -277,6 +294,7 @@ pub fn run(
                 &Knobs {
                     texels: REFERENCE_TEXELS,
                     ray_steps: REFERENCE_STEPS,
+                    tap_spacing: REFERENCE_TAP_SPACING,
                     voxel_mm: None,
                     ..*knobs
                 },
@@ -322,21 +340,13 @@ pub fn run(
             knobs.label(sensor),
             t0.elapsed().as_secs_f64()
         );
-        let mut rates = Vec::new();
-        for _ in 0..rounds {
-            let start = Instant::now();
-            for c in &scene {
-                renderer.render(c)?;
-            }
-            rates.push(scene.len() as f64 / start.elapsed().as_secs_f64());
-        }
-        rates.sort_by(f64::total_cmp);
         let label = knobs.label(sensor);
+        timed.push((renderer, scene.clone()));
         rows.push(Row {
             knobs: *knobs,
             label: label.clone(),
             is_default: *knobs == default,
-            fps: rates[rates.len() / 2],
+            fps: f64::NAN,
             image_error: img_err,
             localisation_error_mm: (found > 0).then(|| loc_sum / found as f64),
             missed: scene.len() - found,
@@ -346,6 +356,24 @@ pub fn run(
         });
         progress(&label);
     }
+    // Speed rounds interleave the configurations (each round times every one in turn), so
+    // that a load which comes and goes on a shared machine weighs on all of them alike.
+    let mut rates = vec![Vec::with_capacity(rounds); rows.len()];
+    for round in 0..rounds {
+        for ((renderer, scene), rates) in timed.iter_mut().zip(&mut rates) {
+            let start = Instant::now();
+            for c in scene.iter() {
+                renderer.render(c)?;
+            }
+            rates.push(scene.len() as f64 / start.elapsed().as_secs_f64());
+        }
+        progress(&format!("speed round {}/{rounds}", round + 1));
+    }
+    for (row, mut rates) in rows.iter_mut().zip(rates) {
+        rates.sort_by(f64::total_cmp);
+        row.fps = rates[rates.len() / 2];
+    }
+    drop(timed);
     let front_img = pareto_front(
         &rows
             .iter()

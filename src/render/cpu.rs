@@ -30,16 +30,16 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
     if let Some(c) = contact {
         let pose = c.pose(sensor)?;
         let config = &sensor.config.elastomer;
-        let reach = elastomer::blend_reach_mm(config);
-        footprint = contact::footprint(sensor, &grid, &pose, &c.object, reach);
+        let kernel = elastomer::Kernel::for_config(&sensor.config, &grid);
+        footprint = contact::footprint(sensor, &grid, &pose, &c.object, kernel.reach_mm);
         if let Some(rect) = footprint.map(|f| f.texels) {
             penetration = contact::penetration_field(sensor, &grid, &pose, &c.object, rect);
-            let meridian = elastomer::blend_meridian(&grid, config, reach, &penetration, rect);
+            let meridian = elastomer::blend_meridian(&grid, config, kernel, &penetration, rect);
             let (h, o) = elastomer::blend_azimuth(
                 &sensor.finger,
                 &grid,
                 config,
-                reach,
+                kernel,
                 &penetration,
                 &meridian,
                 rect,
@@ -111,18 +111,19 @@ pub fn render_contact(
     let mut frame = reference.clone();
     let pose = contact.pose(sensor)?;
     let config = &sensor.config.elastomer;
-    let reach = elastomer::blend_reach_mm(config);
-    let Some(footprint) = contact::footprint(sensor, grid, &pose, &contact.object, reach) else {
+    let kernel = elastomer::Kernel::for_config(&sensor.config, grid);
+    let Some(footprint) = contact::footprint(sensor, grid, &pose, &contact.object, kernel.reach_mm)
+    else {
         return Ok(frame);
     };
     let rect = footprint.texels;
     let penetration = contact::penetration_field(sensor, grid, &pose, &contact.object, rect);
-    let meridian = elastomer::blend_meridian(grid, config, reach, &penetration, rect);
+    let meridian = elastomer::blend_meridian(grid, config, kernel, &penetration, rect);
     let (height, _) = elastomer::blend_azimuth(
         &sensor.finger,
         grid,
         config,
-        reach,
+        kernel,
         &penetration,
         &meridian,
         rect,

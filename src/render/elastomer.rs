@@ -9,16 +9,34 @@
 use super::contact::parallel_radius;
 use super::{HeightfieldGrid, Rect};
 use crate::finger::{Finger, SurfaceCoord};
-use crate::sensor::ElastomerConfig;
+use crate::sensor::{ElastomerConfig, SensorConfig};
 use glam::DVec2;
 
 /// Most kernel taps on each side of the centre.
 pub const MAX_BLEND_TAPS: i32 = 64;
 
-/// Kernel taps on each side of the centre: one per texel of reach, at most
-/// [`MAX_BLEND_TAPS`].
-pub fn blend_taps(reach_mm: f64, grid: &HeightfieldGrid) -> i32 {
-    ((reach_mm / grid.texel_mm()).ceil() as i32).clamp(1, MAX_BLEND_TAPS)
+/// The elastomer's kernels as sampled: how far they reach and how many taps each side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Kernel {
+    /// Surface distance (mm) the kernels reach: [`blend_reach_mm`].
+    pub reach_mm: f64,
+    /// Taps on each side of the centre, spaced `reach_mm / taps` apart.
+    pub taps: i32,
+}
+
+impl Kernel {
+    /// Taps every `render.blend_tap_spacing` narrow standard deviations (`blend_mm`), but
+    /// never closer than one texel (the grid holds nothing finer) and at most
+    /// [`MAX_BLEND_TAPS`]. A Gaussian sampled once per standard deviation sums to its
+    /// integral within 1e-8 (Poisson summation: exp(-2 pi^2)), so closer taps buy little.
+    pub fn for_config(config: &SensorConfig, grid: &HeightfieldGrid) -> Kernel {
+        let reach_mm = blend_reach_mm(&config.elastomer);
+        let spacing =
+            (config.render.blend_tap_spacing * config.elastomer.blend_mm).max(grid.texel_mm());
+        // The epsilon keeps a reach that is a whole number of spacings from gaining a tap.
+        let taps = ((reach_mm / spacing - 1e-9).ceil() as i32).clamp(1, MAX_BLEND_TAPS);
+        Kernel { reach_mm, taps }
+    }
 }
 
 /// How far (mm of surface) the elastomer's kernels reach: 3 standard deviations of the wide
@@ -84,14 +102,10 @@ pub fn blend_weights(config: &ElastomerConfig, reach: f64, taps: i32) -> Vec<DVe
 
 /// One separable pass: for samples `sample(x)` at surface offsets x = k * step, the narrow
 /// Gaussian of their x channel and the wide Gaussian of their y channel.
-fn pass(
-    config: &ElastomerConfig,
-    reach: f64,
-    taps: i32,
-    mut sample: impl FnMut(f64) -> DVec2,
-) -> DVec2 {
-    let step = reach / taps as f64;
-    let weights = blend_weights(config, reach, taps);
+fn pass(config: &ElastomerConfig, kernel: Kernel, mut sample: impl FnMut(f64) -> DVec2) -> DVec2 {
+    let Kernel { reach_mm, taps } = kernel;
+    let step = reach_mm / taps as f64;
+    let weights = blend_weights(config, reach_mm, taps);
     (-taps..=taps)
         .map(|k| weights[k.unsigned_abs() as usize] * sample(k as f64 * step))
         .sum()
@@ -102,12 +116,11 @@ fn pass(
 pub fn blend_meridian(
     grid: &HeightfieldGrid,
     config: &ElastomerConfig,
-    reach: f64,
+    kernel: Kernel,
     field: &[f32],
     rect: Rect,
 ) -> Vec<DVec2> {
     let n = grid.texels as usize;
-    let taps = blend_taps(reach, grid);
     let mut out = vec![DVec2::ZERO; n * n];
     for j in rect.y..rect.y + rect.h {
         for i in rect.x..rect.x + rect.w {
@@ -117,7 +130,7 @@ pub fn blend_meridian(
             } else {
                 DVec2::X
             };
-            out[j as usize * n + i as usize] = pass(config, reach, taps, |x| {
+            out[j as usize * n + i as usize] = pass(config, kernel, |x| {
                 let at = grid.texel_of(u + x * dir);
                 DVec2::splat(sample_field(field, grid.texels, at))
             });
@@ -133,13 +146,12 @@ pub fn blend_azimuth(
     finger: &Finger,
     grid: &HeightfieldGrid,
     config: &ElastomerConfig,
-    reach: f64,
+    kernel: Kernel,
     penetration: &[f32],
     meridian: &[DVec2],
     rect: Rect,
 ) -> (Vec<f32>, u32) {
     let n = grid.texels as usize;
-    let taps = blend_taps(reach, grid);
     let mut height = vec![0.0f32; n * n];
     let mut over = 0;
     for j in rect.y..rect.y + rect.h {
@@ -148,7 +160,7 @@ pub fn blend_azimuth(
             let c = SurfaceCoord::from_disc(grid.texel_centre(i, j));
             let rho = parallel_radius(finger, c.s);
             let v = if rho > 1e-6 {
-                pass(config, reach, taps, |x| {
+                pass(config, kernel, |x| {
                     let phi = c.phi + x / rho;
                     sample_channels(
                         meridian,
@@ -181,5 +193,33 @@ pub fn skin_displacement(p: f64, blend: DVec2, thickness: f64, bulge: f64) -> f6
         0.0
     } else {
         h
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensor::Sensor;
+
+    /// The paper sensor's kernels: 3 mm of reach at one tap per 0.5 mm sigma is 6 taps a
+    /// side (its 0.27 mm texels would give 11); a spacing finer than a texel falls back to
+    /// one tap per texel; and the sampled Gaussians still sum to one.
+    #[test]
+    fn kernel_taps_follow_the_spacing_and_the_texel() {
+        let mut c = Sensor::preset("paper").unwrap().config;
+        let grid = HeightfieldGrid {
+            texels: 256,
+            half_size_mm: 35.0,
+        };
+        assert_eq!(Kernel::for_config(&c, &grid).taps, 6);
+        c.render.blend_tap_spacing = 0.25;
+        let fine = Kernel::for_config(&c, &grid);
+        assert_eq!(fine.taps, (3.0 / grid.texel_mm()).ceil() as i32);
+        c.render.blend_tap_spacing = 2.0;
+        let k = Kernel::for_config(&c, &grid);
+        assert_eq!(k.taps, 3);
+        let w = blend_weights(&c.elastomer, k.reach_mm, k.taps);
+        let total = w.iter().skip(1).sum::<DVec2>() * 2.0 + w[0];
+        assert!((total - DVec2::ONE).abs().max_element() < 1e-12);
     }
 }

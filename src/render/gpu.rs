@@ -955,11 +955,7 @@ impl Renderer {
 
     /// Records and runs the prepared frames; returns each frame with its over-pressed texels,
     /// and each contact's own penetration over its texel rect's rows.
-    fn run(
-        &mut self,
-        prepared: &[Prepared],
-        timings: &mut Timings,
-    ) -> Result<Ran> {
+    fn run(&mut self, prepared: &[Prepared], timings: &mut Timings) -> Result<Ran> {
         let start = Instant::now();
         let (field_offsets, field_bytes) = self.field_offsets(prepared);
         self.reserve_fields(field_bytes);

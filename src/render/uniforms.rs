@@ -84,8 +84,8 @@ impl SensorUniform {
         let c = &sensor.config;
         let lights = leds::leds(sensor);
         let f = &sensor.finger;
-        let reach = super::elastomer::blend_reach_mm(&c.elastomer);
-        let taps = super::elastomer::blend_taps(reach, grid);
+        let kernel = super::elastomer::Kernel::for_config(c, grid);
+        let (reach, taps) = (kernel.reach_mm, kernel.taps);
         let mut blend_weights = [[0.0f32; 4]; BLEND_WEIGHTS];
         for (slot, w) in blend_weights
             .iter_mut()
