@@ -10,6 +10,7 @@ use crate::finger::{Finger, SurfaceCoord};
 use crate::object::Object;
 use crate::sensor::Sensor;
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 
 /// Sphere-tracing steps before a texel is declared untouched.
 pub const MAX_TRACE_STEPS: u32 = 48;
@@ -72,6 +73,41 @@ pub struct Footprint {
     pub pixels: Option<Rect>,
 }
 
+/// Bounds of a footprint's samples on the disc and in the image.
+#[derive(Debug, Clone, Copy)]
+struct Bounds {
+    disc_lo: DVec2,
+    disc_hi: DVec2,
+    px_lo: DVec2,
+    px_hi: DVec2,
+    any_seen: bool,
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        let (lo, hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        Bounds {
+            disc_lo: lo,
+            disc_hi: hi,
+            px_lo: lo,
+            px_hi: hi,
+            any_seen: false,
+        }
+    }
+}
+
+impl Bounds {
+    fn merge(a: Bounds, b: Bounds) -> Bounds {
+        Bounds {
+            disc_lo: a.disc_lo.min(b.disc_lo),
+            disc_hi: a.disc_hi.max(b.disc_hi),
+            px_lo: a.px_lo.min(b.px_lo),
+            px_hi: a.px_hi.max(b.px_hi),
+            any_seen: a.any_seen || b.any_seen,
+        }
+    }
+}
+
 /// The pixel where the camera sees the direction of `p` (for points just outside the
 /// finger, such as a bulge, the direction is what matters), and whether the lens sees it;
 /// a direction beyond the lens gets the pixel on the lens's edge at its azimuth.
@@ -125,21 +161,25 @@ pub fn footprint(
     };
     let s_lo = s_of_height(pose.origin.z + reach) - 1e-3;
     let s_hi = (s_of_height(pose.origin.z - reach) + 1e-3).min(grid.half_size_mm);
+    // Rows of cells in parallel: the GPU waits for this (prepare is on the frame's path).
     let mut marked = vec![false; (cells * cells) as usize];
-    for cj in 0..cells {
-        for ci in 0..cells {
-            let s = centre(ci, cj).length();
-            if s < s_lo || s > s_hi {
-                continue;
+    marked
+        .par_chunks_mut(cells as usize)
+        .enumerate()
+        .for_each(|(cj, row)| {
+            for (ci, mark) in row.iter_mut().enumerate() {
+                let (ci, cj) = (ci as u32, cj as u32);
+                let s = centre(ci, cj).length();
+                if s < s_lo || s > s_hi {
+                    continue;
+                }
+                let coord = SurfaceCoord::from_disc(centre(ci, cj));
+                if (f.point_at(coord).point - pose.origin).length() > reach {
+                    continue;
+                }
+                *mark = penetration(f, pose, object, coord, max_depth, drape, tolerance) > 0.0;
             }
-            let coord = SurfaceCoord::from_disc(centre(ci, cj));
-            if (f.point_at(coord).point - pose.origin).length() > reach {
-                continue;
-            }
-            marked[(cj * cells + ci) as usize] =
-                penetration(f, pose, object, coord, max_depth, drape, tolerance) > 0.0;
-        }
-    }
+        });
     let is_marked = |ci: i64, cj: i64| {
         ci >= 0
             && cj >= 0
@@ -150,16 +190,16 @@ pub fn footprint(
     // How far the imprint's influence reaches beyond a marked cell's centre (surface mm);
     // a 10% margin covers the bounding box falling between the 8 sampled directions.
     let grow = 1.1 * blend_reach_mm + cell_mm;
-    let (mut disc_lo, mut disc_hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    let (mut px_lo, mut px_hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    let mut any_seen = false;
     let depths = [
         -0.5 * f.shell_thickness,
         0.0,
         0.5 * f.shell_thickness,
         f.shell_thickness,
     ];
-    for cj in 0..cells as i64 {
+    // Per row of cells, then merged: the bounds of the grown boundary cells on the disc and
+    // in the image (min and max do not depend on the order, so neither does the result).
+    let row_bounds = |cj: i64| {
+        let mut b = Bounds::default();
         for ci in 0..cells as i64 {
             if !is_marked(ci, cj) {
                 continue;
@@ -190,22 +230,33 @@ pub fn footprint(
             around.push(c);
             for p in around {
                 let disc = p.to_disc();
-                disc_lo = disc_lo.min(disc);
-                disc_hi = disc_hi.max(disc);
+                b.disc_lo = b.disc_lo.min(disc);
+                b.disc_hi = b.disc_hi.max(disc);
                 let sp = f.point_at(p);
                 for depth in depths {
                     // Samples beyond the lens count at its edge: where the imprint runs out
                     // of view, what is seen of it reaches the edge (a short arc, inside the
                     // rectangle's padding).
                     let (px, seen) = pixel_towards(sensor, sp.point - depth * sp.normal);
-                    any_seen |= seen;
+                    b.any_seen |= seen;
                     // Pixel centres are at integers: shift to cell space.
-                    px_lo = px_lo.min(px + DVec2::splat(0.5));
-                    px_hi = px_hi.max(px + DVec2::splat(0.5));
+                    b.px_lo = b.px_lo.min(px + DVec2::splat(0.5));
+                    b.px_hi = b.px_hi.max(px + DVec2::splat(0.5));
                 }
             }
         }
-    }
+        b
+    };
+    let Bounds {
+        disc_lo,
+        disc_hi,
+        px_lo,
+        px_hi,
+        any_seen,
+    } = (0..cells as i64)
+        .into_par_iter()
+        .map(row_bounds)
+        .reduce(Bounds::default, Bounds::merge);
     if disc_lo.x > disc_hi.x {
         return None;
     }
@@ -372,8 +423,9 @@ pub fn first_touch(
     let cells = (n + SUB - 1) / SUB;
     let first = ((half - s_hi - cell_mm) / cell_mm).floor().max(0.0) as i64;
     let last = (cells - first).min(cells);
-    let mut bounds: Vec<(i64, i64, f64)> = Vec::new();
-    for cj in first..last {
+    // Rows of cells in parallel, collected in order (so the sort below sees the same list).
+    let row_bounds = |cj: i64| {
+        let mut bounds: Vec<(i64, i64, f64)> = Vec::new();
         for ci in first..last {
             let disc = DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm - DVec2::splat(half);
             let s = disc.length();
@@ -405,7 +457,12 @@ pub fn first_touch(
                 bounds.push((ci, cj, u));
             }
         }
-    }
+        bounds
+    };
+    let mut bounds: Vec<(i64, i64, f64)> = (first..last.max(first))
+        .into_par_iter()
+        .flat_map_iter(row_bounds)
+        .collect();
     bounds.sort_by(|x, y| y.2.total_cmp(&x.2));
     let mut floor = t_lo;
     let mut samples: Vec<(SurfaceCoord, f64)> = Vec::new();
