@@ -11,7 +11,7 @@ use crate::object::{Object, Solid};
 use crate::output;
 use crate::plot;
 use crate::render::gpu::Renderer;
-use crate::render::{Contact, GroundTruth, Place};
+use crate::render::{Contact, GroundTruth, Place, Press};
 use crate::sensor::Sensor;
 use crate::view;
 use image::RgbImage;
@@ -105,25 +105,6 @@ pub struct Report {
     /// Per method: (pairs, pairs where something was detected, mean distance to the nearer
     /// of the two contacts).
     pub two_contacts: TwoContactTrials,
-}
-
-/// The stand-in for multi-contact rendering (until the renderer draws several contacts in
-/// one frame): per pixel, the frame of `a` or `b` that differs more from `reference` (sum of
-/// absolute channel differences). Imprints far apart composite exactly; overlapping ones
-/// keep the stronger of the two per pixel instead of the physics of both.
-pub fn composite_two(reference: &RgbImage, a: &RgbImage, b: &RgbImage) -> RgbImage {
-    let mut out = a.clone();
-    for ((o, (pa, pb)), r) in out
-        .pixels_mut()
-        .zip(a.pixels().zip(b.pixels()))
-        .zip(reference.pixels())
-    {
-        let diff = |p: &image::Rgb<u8>| (0..3).map(|c| p.0[c].abs_diff(r.0[c]) as u32).sum::<u32>();
-        if diff(pb) > diff(pa) {
-            *o = *pb;
-        }
-    }
-    out
 }
 
 fn sphere(s: f64, azimuth_deg: f64, depth: f64) -> Contact {
@@ -238,10 +219,10 @@ pub fn run(
         // Two simultaneous contacts: opposite azimuths at each visible arc length, at the
         // sweep's deepest depth.
         let pair_depth = sweep.depths.iter().cloned().fold(0.0, f64::max);
-        let mut pair_frames: Vec<(RgbImage, GroundTruth)> = Vec::new();
+        let mut pair_contacts: Vec<(Contact, GroundTruth)> = Vec::new();
         for chunk in contacts.chunks(16) {
             let rendered = renderer.render_batch(chunk)?;
-            for (frame, truth) in rendered {
+            for ((frame, truth), contact) in rendered.into_iter().zip(chunk) {
                 // In the noisy pass this is settled from the noise-free pass below.
                 let image_changed = noisy || frame.rgba != renderer.reference().rgba;
                 let image = frame.to_rgb();
@@ -272,9 +253,9 @@ pub fn run(
                 if !noisy
                     && (truth.depth_mm - pair_depth).abs() < 1e-9
                     && visible
-                    && pair_frames.len() < 2 * places.len()
+                    && pair_contacts.len() < 2 * places.len()
                 {
-                    pair_frames.push((image, truth));
+                    pair_contacts.push((contact.clone(), truth));
                 }
             }
             done += chunk.len();
@@ -297,7 +278,8 @@ pub fn run(
             false_detections.push((noisy, method, hits, empties.len()));
         }
         if !noisy {
-            two_contacts = two_contact_trials(&localiser, &reference, &pair_frames, sweep)?;
+            two_contacts =
+                two_contact_trials(&mut renderer, &localiser, &reference, &pair_contacts, sweep)?;
         }
     }
     // The noisy pass's contacts leave a trace exactly when their noise-free twins do.
@@ -360,28 +342,33 @@ pub fn run(
 /// nearer of the two contacts.
 type TwoContactTrials = Vec<(Method, usize, usize, Option<f64>)>;
 
-/// Pairs of single-contact frames (same arc length, azimuths half a turn apart where the
-/// sweep has them, else consecutive frames) composited by [`composite_two`].
+/// Pairs of the sweep's contacts (same arc length, azimuths half a turn apart where the
+/// sweep has them, else consecutive ones) rendered together as one scene.
 fn two_contact_trials(
+    renderer: &mut Renderer,
     localiser: &Localiser,
     reference: &RgbImage,
-    frames: &[(RgbImage, GroundTruth)],
+    contacts: &[(Contact, GroundTruth)],
     sweep: &Sweep,
 ) -> Result<TwoContactTrials> {
-    let n = frames.len();
+    let n = contacts.len();
     let half = if sweep.azimuths >= 2 && n >= 2 {
         n / 2
     } else {
         1
     };
+    let mut scenes = Vec::new();
+    for i in 0..n.saturating_sub(half) {
+        let (a, ta) = &contacts[i];
+        let (b, tb) = &contacts[i + half];
+        let (frame, _) = renderer.render_scene(&[Press::from(a), Press::from(b)])?;
+        scenes.push((frame.to_rgb(), ta, tb));
+    }
     let mut out = Vec::new();
     for &method in &sweep.methods {
         let (mut pairs, mut found, mut sum) = (0, 0, 0.0);
-        for i in 0..n.saturating_sub(half) {
-            let (a, ta) = &frames[i];
-            let (b, tb) = &frames[i + half];
-            let image = composite_two(reference, a, b);
-            let d = localiser.localise(reference, &image, method)?;
+        for (image, ta, tb) in &scenes {
+            let d = localiser.localise(reference, image, method)?;
             pairs += 1;
             if let (true, Some(p)) = (d.detected, d.point) {
                 found += 1;
@@ -543,7 +530,7 @@ impl Report {
         for (noisy, m, hits, n) in &self.false_detections {
             let _ = writeln!(md, "| {m} | {} | {hits} / {n} |", self.pass_name(*noisy));
         }
-        let _ = writeln!(md, "\n**Two simultaneous contacts** (at the deepest depth, composited from two single-contact renders on opposite meridians; see `composite_two`)\n\n| method | pairs | something detected | mean distance to the nearer contact (mm) |\n|---|---|---|---|");
+        let _ = writeln!(md, "\n**Two simultaneous contacts** (at the deepest depth, on opposite meridians, rendered as one scene)\n\n| method | pairs | something detected | mean distance to the nearer contact (mm) |\n|---|---|---|---|");
         for (m, pairs, found, err) in &self.two_contacts {
             let _ = writeln!(
                 md,
