@@ -7,7 +7,6 @@ use geltip::jobs::{preview, stability, tradeoff};
 use geltip::localise::Method;
 use geltip::sensor::Sensor;
 use geltip::LensModel;
-use image::{Rgb, RgbImage};
 use std::f64::consts::FRAC_PI_2;
 
 fn gpu_env() {
