@@ -25,7 +25,7 @@ fn ray_probes(dir: vec3<f32>) -> Probes {
 }
 
 fn height_at_disc(u: vec2<f32>) -> f32 {
-    return sample_map(height_map, texel_of(u)).x;
+    return sample_map_x(height_map, texel_of(u));
 }
 
 // The largest displacement the probes see.
@@ -79,7 +79,7 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
 // Outward normal of the deformed skin: the undeformed normal plus the interpolated offset.
 fn skin_normal(c: vec2<f32>) -> vec3<f32> {
     let n0 = surface_normal(c);
-    let offset = sample_map(elastomer_map, texel_of(disc_of(c))).xyz;
+    let offset = sample_map_xyz(elastomer_map, texel_of(disc_of(c)));
     let n = n0 + offset;
     let len = length(n);
     if len == 0.0 {

@@ -6,11 +6,11 @@
 // then parallels), kernels in surface millimetres. Mirror: src/render/elastomer.rs.
 
 fn sample_penetration(t: vec2<f32>) -> f32 {
-    return sample_map(penetration_map, t).x;
+    return sample_map_x(penetration_map, t);
 }
 
 fn sample_meridian(t: vec2<f32>) -> vec2<f32> {
-    return sample_map(elastomer_map, t).xy;
+    return sample_map_xy(elastomer_map, t);
 }
 
 @compute @workgroup_size(8, 8)

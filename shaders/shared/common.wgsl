@@ -114,6 +114,9 @@ const PROBES_STRIDE: u32 = 2u;
 @group(0) @binding(12) var height_map: texture_2d<f32>;
 // The same for the rays' probes: pixel (x, y)'s two vec4 are texels (2x, y) and (2x + 1, y).
 @group(0) @binding(13) var probe_map: texture_2d<f32>;
+// Nearest, clamped to the edge: only for textureGather, which fetches a texel's 2x2 block
+// in one sampler operation (the weights and the zero outside the grid are ours).
+@group(0) @binding(14) var map_sampler: sampler;
 
 // Texels pressed beyond the shell.
 const OVER_PRESSED: u32 = 0u;
@@ -303,37 +306,50 @@ fn texel_of(disc: vec2<f32>) -> vec2<f32> {
     return (disc + sensor.half_size_mm) / sensor.texel_mm;
 }
 
-// Bilinear interpolation at continuous texel coordinates t (centres at +0.5) over the four
-// texels (x, y), (x+1, y), (x, y+1), (x+1, y+1): their coordinates clamped into the grid and
-// their weights, 0 for a texel outside it, so a sample is a plain weighted sum of four
-// fetches with no branches (mirror: src/render/elastomer.rs bilinear_taps).
-struct Taps {
-    x: vec4<i32>,
-    y: vec4<i32>,
-    weight: vec4<f32>,
-}
-
-fn bilinear_taps(t: vec2<f32>) -> Taps {
+// Bilinear samples of a heightfield map at continuous texel coordinates t (centres at
+// +0.5), zero outside the grid, with no branches (mirror: src/render/elastomer.rs
+// bilinear_taps): the 2x2 block of texels (x, y) .. (x+1, y+1) is gathered at its shared
+// corner (half a texel from any rounding decision the sampler makes), one component at a
+// time, and weighed here, a texel outside the grid weighing 0 (the clamped sampler returns
+// the edge's). Why gather: llvmpipe fetches the block with one vectorised sampler
+// operation, where four textureLoads cost about twice as much.
+fn gather_weights(t: vec2<f32>) -> vec4<f32> {
     let p = t - 0.5;
     let base = floor(p);
     let f = p - base;
-    let n = i32(sensor.texels);
-    let x = vec4<i32>(i32(base.x)) + vec4<i32>(0, 1, 0, 1);
-    let y = vec4<i32>(i32(base.y)) + vec4<i32>(0, 0, 1, 1);
-    let inside = x >= vec4<i32>(0) & y >= vec4<i32>(0) & x < vec4<i32>(n) & y < vec4<i32>(n);
-    let weight = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
-    var out: Taps;
-    out.weight = select(vec4<f32>(0.0), weight, inside);
-    out.x = clamp(x, vec4<i32>(0), vec4<i32>(n - 1));
-    out.y = clamp(y, vec4<i32>(0), vec4<i32>(n - 1));
-    return out;
+    let n = f32(sensor.texels);
+    // In textureGather's order: (x, y+1), (x+1, y+1), (x+1, y), (x, y).
+    let x = vec4<f32>(base.x) + vec4<f32>(0.0, 1.0, 1.0, 0.0);
+    let y = vec4<f32>(base.y) + vec4<f32>(1.0, 1.0, 0.0, 0.0);
+    let inside = x >= vec4<f32>(0.0) & y >= vec4<f32>(0.0) & x < vec4<f32>(n) & y < vec4<f32>(n);
+    let weight = vec4<f32>((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
+    return select(vec4<f32>(0.0), weight, inside);
 }
 
-// Bilinear sample of a heightfield map, zero outside the grid.
-fn sample_map(map: texture_2d<f32>, t: vec2<f32>) -> vec4<f32> {
-    let b = bilinear_taps(t);
-    return b.weight.x * textureLoad(map, vec2<i32>(b.x.x, b.y.x), 0)
-        + b.weight.y * textureLoad(map, vec2<i32>(b.x.y, b.y.y), 0)
-        + b.weight.z * textureLoad(map, vec2<i32>(b.x.z, b.y.z), 0)
-        + b.weight.w * textureLoad(map, vec2<i32>(b.x.w, b.y.w), 0);
+fn gather_corner(t: vec2<f32>) -> vec2<f32> {
+    return (floor(t - 0.5) + 1.0) / f32(sensor.texels);
 }
+
+fn sample_map_x(map: texture_2d<f32>, t: vec2<f32>) -> f32 {
+    return dot(textureGather(0, map, map_sampler, gather_corner(t)), gather_weights(t));
+}
+
+fn sample_map_xy(map: texture_2d<f32>, t: vec2<f32>) -> vec2<f32> {
+    let w = gather_weights(t);
+    let at = gather_corner(t);
+    return vec2<f32>(
+        dot(textureGather(0, map, map_sampler, at), w),
+        dot(textureGather(1, map, map_sampler, at), w),
+    );
+}
+
+fn sample_map_xyz(map: texture_2d<f32>, t: vec2<f32>) -> vec3<f32> {
+    let w = gather_weights(t);
+    let at = gather_corner(t);
+    return vec3<f32>(
+        dot(textureGather(0, map, map_sampler, at), w),
+        dot(textureGather(1, map, map_sampler, at), w),
+        dot(textureGather(2, map, map_sampler, at), w),
+    );
+}
+

@@ -116,6 +116,8 @@ pub struct Renderer {
     probes: wgpu::Buffer,
     /// `probes` as the passes read it: pixel (x, y)'s two vec4 are texels (2x, y), (2x+1, y).
     probe_map: MapTexture,
+    /// Nearest, clamped: the maps' textureGather (see `shaders/shared/common.wgsl`).
+    map_sampler: wgpu::Sampler,
     image: wgpu::Buffer,
     indentation: wgpu::Buffer,
     counters: wgpu::Buffer,
@@ -317,6 +319,12 @@ impl Renderer {
             map_entry(11),
             map_entry(12),
             map_entry(13),
+            wgpu::BindGroupLayoutEntry {
+                binding: 14,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+                count: None,
+            },
         ];
         let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
             let layout = ctx
@@ -386,6 +394,10 @@ impl Renderer {
                 wgpu::TextureFormat::Rgba32Float,
             ),
             dirty: None,
+            map_sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("geltip map sampler"),
+                ..Default::default()
+            }),
             probes: storage(
                 ctx,
                 "geltip ray probes",
@@ -500,6 +512,7 @@ impl Renderer {
             map(Map::Elastomer),
             map(Map::Height),
             wgpu::BindingResource::TextureView(&self.probe_map.view),
+            wgpu::BindingResource::Sampler(&self.map_sampler),
         ];
         let entries: Vec<wgpu::BindGroupEntry> = resources
             .into_iter()
