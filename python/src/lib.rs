@@ -1227,7 +1227,7 @@ fn load_image<'py>(
     })?;
     let (w, h) = img.dimensions();
     let array = PyArray::from_vec(py, img.into_raw());
-    Ok(array.reshape([h as usize, w as usize, 3])?)
+    array.reshape([h as usize, w as usize, 3])
 }
 
 #[pymodule]

@@ -126,19 +126,25 @@ def test_scene_matches_cli(sim, cli, tmp_path):
 
 
 def test_gil_released_while_rendering(sim):
-    contacts = batch_contacts() * 2
+    """While a batch renders on another thread, this thread keeps running Python: the
+    longest pause it sees is a small part of the batch's time (with the GIL held for the
+    whole render it would be nearly all of it)."""
+    contacts = batch_contacts() * 4
     done = threading.Event()
     thread = threading.Thread(target=lambda: (sim.render_batch(contacts), done.set()))
-    ticks = 0
-    start = time.perf_counter()
+    longest, ticks = 0.0, 0
+    start = last = time.perf_counter()
     thread.start()
-    while not done.is_set() and thread.is_alive():
+    while thread.is_alive():
+        now = time.perf_counter()
+        longest = max(longest, now - last)
+        last = now
         ticks += 1
     thread.join()
     elapsed = time.perf_counter() - start
     assert done.is_set()
-    # With the GIL held for the whole batch this loop could not run until it ended.
-    assert elapsed > 0.05 and ticks > 10_000, (elapsed, ticks)
+    assert elapsed > 0.1, elapsed
+    assert longest < 0.5 * elapsed, (longest, elapsed, ticks)
 
 
 @pytest.mark.parametrize(
