@@ -20,6 +20,7 @@ import numpy as np
 
 from ._errors import GeltipError, GeltipIOError, GpuError, InvalidArgumentError
 from ._geltip import (
+    BUILD_PROFILE,
     MAX_BATCH,
     REGION_CYLINDER,
     REGION_HEMISPHERE,
@@ -44,6 +45,7 @@ def region_names(regions: "np.typing.ArrayLike") -> np.ndarray:
 
 
 __all__ = [
+    "BUILD_PROFILE",
     "Dataset",
     "GeltipError",
     "GeltipIOError",

@@ -6,6 +6,8 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+#: "release" or "debug": how the native module was compiled.
+BUILD_PROFILE: str
 #: Contacts per GPU submission in `Simulator.render_batch`.
 MAX_BATCH: int
 REGION_NONE: int

@@ -1241,5 +1241,14 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("REGION_HEMISPHERE", REGION_HEMISPHERE)?;
     m.add("REGION_CYLINDER", REGION_CYLINDER)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // "release" for wheels and `maturin develop --release`; benchmarks refuse "debug".
+    m.add(
+        "BUILD_PROFILE",
+        if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        },
+    )?;
     Ok(())
 }
