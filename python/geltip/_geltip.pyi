@@ -54,8 +54,9 @@ class Sensor:
         self, points: npt.ArrayLike, *, reasons: bool
     ) -> Union[npt.NDArray[np.float64], Tuple[npt.NDArray[np.float64], List[Optional[str]]]]: ...
     def project(self, points: npt.ArrayLike, *, reasons: bool = False) -> Any:
-        """Points (N, 3) (or one point (3,)) in mm -> pixels (N, 2) float64; NaN rows where
-        a point is not visible. With reasons=True: (pixels, [None | why not, ...])."""
+        """Points (N, 3) (or one point (3,)) in mm -> pixels (N, 2) (or (2,)) float64; NaN
+        where a point is not visible. With reasons=True: (pixels, [None | why not, ...]), or
+        (pixel, None | why not) for one point; the reasons are the CLI's `reason`."""
     def unproject(
         self, pixels: npt.ArrayLike
     ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.int8]]:

@@ -938,7 +938,10 @@ impl Simulator {
             r.render_scene(std::slice::from_ref(&press))
         })?;
         drop(guard);
-        frame_tuple(py, &frame, &truths[0].to_json())
+        let truth = truths
+            .first()
+            .ok_or_else(|| Failure::from(GeltipError::Gpu("no labels for the contact".into())))?;
+        frame_tuple(py, &frame, &truth.to_json())
     }
 
     /// Several contacts in one frame (`geltip render --scene`): a list of dicts with
