@@ -1,6 +1,6 @@
 """Type stubs of the native module (python/src/lib.rs)."""
 import os
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -48,15 +48,17 @@ class Sensor:
     def config(self) -> Dict[str, Any]:
         """The whole configuration (the TOML file's tables) as a dict."""
     @overload
-    def project(self, points: npt.ArrayLike) -> npt.NDArray[np.float64]: ...
+    def project(
+        self, points: npt.ArrayLike, *, reasons: Literal[False] = False
+    ) -> npt.NDArray[np.float64]:
+        """Points (N, 3) (or one point (3,)) in mm -> pixels (N, 2) (or (2,)) float64; NaN
+        where a point is not visible."""
     @overload
     def project(
-        self, points: npt.ArrayLike, *, reasons: bool
-    ) -> Union[npt.NDArray[np.float64], Tuple[npt.NDArray[np.float64], List[Optional[str]]]]: ...
-    def project(self, points: npt.ArrayLike, *, reasons: bool = False) -> Any:
-        """Points (N, 3) (or one point (3,)) in mm -> pixels (N, 2) (or (2,)) float64; NaN
-        where a point is not visible. With reasons=True: (pixels, [None | why not, ...]), or
-        (pixel, None | why not) for one point; the reasons are the CLI's `reason`."""
+        self, points: npt.ArrayLike, *, reasons: Literal[True]
+    ) -> Tuple[npt.NDArray[np.float64], Union[List[Optional[str]], Optional[str]]]:
+        """(pixels, [None | why not, ...]), or (pixel, None | why not) for one point; the
+        reasons are the CLI's `reason`."""
     def unproject(
         self, pixels: npt.ArrayLike
     ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.int8]]:

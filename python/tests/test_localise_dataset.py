@@ -117,3 +117,35 @@ def test_dataset_is_a_torch_dataset_when_torch_imports(dataset_dir):
         from collections.abc import Sequence
 
         assert isinstance(geltip.Dataset(dataset_dir), Sequence)
+
+
+def test_dataset_subclasses_torch_dataset(dataset_dir, monkeypatch):
+    """With PyTorch importable, Dataset is a torch.utils.data.Dataset (checked here with a
+    stand-in torch module when PyTorch is not installed)."""
+    import importlib
+    import sys
+    import types
+
+    import geltip.dataset
+
+    if not geltip.dataset.TORCH:
+        class FakeTorchDataset:
+            pass
+
+        torch = types.ModuleType("torch")
+        utils = types.ModuleType("torch.utils")
+        data = types.ModuleType("torch.utils.data")
+        data.Dataset = FakeTorchDataset
+        torch.utils, utils.data = utils, data
+        for name, module in [("torch", torch), ("torch.utils", utils), ("torch.utils.data", data)]:
+            monkeypatch.setitem(sys.modules, name, module)
+    try:
+        reloaded = importlib.reload(geltip.dataset)
+        import torch.utils.data
+
+        ds = reloaded.Dataset(dataset_dir)
+        assert reloaded.TORCH and isinstance(ds, torch.utils.data.Dataset)
+        assert len(ds) == 5 and ds[2]["index"] == 2
+    finally:
+        monkeypatch.undo()
+        importlib.reload(geltip.dataset)
