@@ -649,7 +649,7 @@ impl<'a, 'py> ContactArgs<'a, 'py> {
                 "required: a built-in solid (cone, sphere, irregular-prism, cylinder, edge, tube, slab, torus, disc) or a mesh file",
             )
         })?;
-        let object = objects.get(&path_or_str(&f("object"), object)?)?;
+        let object = objects.get(object.py(), &path_or_str(&f("object"), object)?)?;
         let places = [
             ("at", self.at),
             ("rotation", self.rotation),
@@ -754,11 +754,14 @@ impl<'a, 'py> ContactArgs<'a, 'py> {
 struct Objects(Mutex<HashMap<String, Arc<Object>>>);
 
 impl Objects {
-    fn get(&self, name: &str) -> PyResult<Arc<Object>> {
+    fn get(&self, py: Python<'_>, name: &str) -> PyResult<Arc<Object>> {
         if let Some(o) = self.0.lock().map_err(|_| poisoned())?.get(name) {
             return Ok(o.clone());
         }
-        let object = Arc::new(lib(Object::from_arg(name))?);
+        // A mesh is baked here (seconds for a detailed one): without the GIL.
+        let object = Arc::new(detached(py, "loading an object", || {
+            Object::from_arg(name)
+        })?);
         self.0
             .lock()
             .map_err(|_| poisoned())?
