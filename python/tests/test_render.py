@@ -251,3 +251,21 @@ def test_gpu_timeout_is_an_exception():
     p = run_python(code, GELTIP_GPU_TIMEOUT_S="0.000001")
     assert p.returncode == 0, p.stderr
     assert p.stdout.startswith("gpu: ") and "\n" not in p.stdout.strip(), p.stdout
+
+
+def test_mesh_object_matches_cli(sensor, cli, tmp_path):
+    """A mesh file, preloaded by Simulator(objects=[...]) (baked once), renders the CLI's
+    bytes; asking for it again uses the preloaded object."""
+    cli("objects", "--out", tmp_path)
+    mesh = str(tmp_path / "cone.obj")
+    cli("render", "--sensor", "paper", "--object", mesh, "--at", "rotation=30", "--depth", "1",
+        "-o", tmp_path / "m.png", "--labels", tmp_path / "m.json")
+    sim = geltip.Simulator(sensor, objects=[mesh])
+    image, labels, _ = sim.render(object=mesh, at="rotation=30", depth=1)
+    np.testing.assert_array_equal(image, read_png(tmp_path / "m.png"))
+    assert labels == json.loads((tmp_path / "m.json").read_text())
+    assert labels["object"] == "cone"
+    images, _, _ = sim.render_batch([dict(object=mesh, at="rotation=30", depth=1)])
+    np.testing.assert_array_equal(images[0], image)
+    with pytest.raises(ValueError, match=r"^objects\[0\]: expected a str or a path"):
+        geltip.Simulator(sensor, objects=[3])
