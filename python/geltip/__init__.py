@@ -1,0 +1,65 @@
+"""geltip: a simulator of the GelTip optical tactile sensor, from Python.
+
+NumPy in and out: images are (H, W, 3) uint8 arrays, indentation (depth) maps (H, W)
+float32 in mm, points (N, 3) float64 in mm, pixels (N, 2) float64 (OpenCV convention).
+
+    import geltip
+    sensor = geltip.Sensor("paper")
+    sim = geltip.Simulator(sensor)
+    reference = sim.reference()
+    image, labels, depth = sim.render(object="sphere", at="rotation=30", depth=1.0)
+    found = geltip.localise(sensor, reference, image)
+
+Errors are ``geltip.GeltipError`` subclasses carrying the command line's one-line message:
+``InvalidArgumentError`` (a ``ValueError``), ``GpuError`` (a ``RuntimeError``) and
+``GeltipIOError`` (an ``OSError``).
+"""
+from typing import Tuple
+
+import numpy as np
+
+from ._errors import GeltipError, GeltipIOError, GpuError, InvalidArgumentError
+from ._geltip import (
+    BUILD_PROFILE,
+    MAX_BATCH,
+    REGION_CYLINDER,
+    REGION_HEMISPHERE,
+    REGION_NONE,
+    Sensor,
+    Simulator,
+    __version__,
+    load_image,
+    localise,
+)
+from .dataset import Dataset
+
+#: Names of `Sensor.unproject`'s region codes, by code: 0 none, 1 hemisphere, 2 cylinder
+#: (the CLI's "region" strings).
+REGION_NAMES: Tuple[str, str, str] = ("none", "hemisphere", "cylinder")
+
+
+def region_names(regions: "np.typing.ArrayLike") -> np.ndarray:
+    """`Sensor.unproject`'s region codes as the CLI's strings ("none", "hemisphere",
+    "cylinder"), same shape."""
+    return np.asarray(REGION_NAMES, dtype=object)[np.asarray(regions, dtype=np.intp)]
+
+
+__all__ = [
+    "BUILD_PROFILE",
+    "Dataset",
+    "GeltipError",
+    "GeltipIOError",
+    "GpuError",
+    "InvalidArgumentError",
+    "MAX_BATCH",
+    "REGION_CYLINDER",
+    "REGION_HEMISPHERE",
+    "REGION_NAMES",
+    "REGION_NONE",
+    "Sensor",
+    "Simulator",
+    "__version__",
+    "load_image",
+    "localise",
+    "region_names",
+]

@@ -1,0 +1,131 @@
+"""Type stubs of the native module (python/src/lib.rs)."""
+import os
+from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+#: "release" or "debug": how the native module was compiled.
+BUILD_PROFILE: str
+#: Contacts per GPU submission in `Simulator.render_batch`.
+MAX_BATCH: int
+REGION_NONE: int
+REGION_HEMISPHERE: int
+REGION_CYLINDER: int
+
+_Path = Union[str, "os.PathLike[str]"]
+_Number = Union[float, int, np.floating, np.integer]
+#: "rotation=30" | "translation=10" | "s=12", or ("rotation", 30), or {"rotation": 30}
+_Place = Union[str, Tuple[str, _Number], Mapping[str, _Number]]
+_Image = npt.NDArray[np.uint8]
+_Depth = npt.NDArray[np.float32]
+Labels = Dict[str, Any]
+
+class Sensor:
+    """A GelTip sensor: the finger, its lens and the image they form."""
+
+    def __init__(self, name: Optional[_Path] = None) -> None:
+        """A preset name ("paper", "webcam70", "tube13", "tube21"; default "paper") or
+        the path of a sensor TOML file, as the CLI's `--sensor`."""
+    @staticmethod
+    def from_toml(path_or_str: _Path, name: Optional[str] = None) -> Sensor:
+        """A sensor from a TOML file (a path) or from TOML text."""
+    @staticmethod
+    def presets() -> List[str]: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def image_shape(self) -> Tuple[int, int, int]:
+        """(height, width, 3)."""
+    @property
+    def description(self) -> str: ...
+    @property
+    def config(self) -> Dict[str, Any]:
+        """The whole configuration (the TOML file's tables) as a dict."""
+    @overload
+    def project(
+        self, points: npt.ArrayLike, *, reasons: Literal[False] = False
+    ) -> npt.NDArray[np.float64]:
+        """Points (N, 3) (or one point (3,)) in mm -> pixels (N, 2) (or (2,)) float64; NaN
+        where a point is not visible."""
+    @overload
+    def project(
+        self, points: npt.ArrayLike, *, reasons: Literal[True]
+    ) -> Tuple[npt.NDArray[np.float64], Union[List[Optional[str]], Optional[str]]]:
+        """(pixels, [None | why not, ...]), or (pixel, None | why not) for one point; the
+        reasons are the CLI's `reason`."""
+    def unproject(
+        self, pixels: npt.ArrayLike
+    ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.int8]]:
+        """Pixels (N, 2) (or one (2,)) -> (points (N, 3) mm, unit normals (N, 3), region (N,)
+        int8). Region codes: 0 = none (the pixel sees no part of the finger: NaN point and
+        normal), 1 = hemisphere, 2 = cylinder; `geltip.region_names` maps them to strings."""
+
+class Simulator:
+    """The renderer of one sensor: GPU context, pipelines and reference frame, made once."""
+
+    def __init__(
+        self,
+        sensor: Union[Sensor, _Path, None] = None,
+        objects: Optional[Sequence[_Path]] = None,
+    ) -> None:
+        """`objects`: solids or mesh files to load (meshes are baked) now rather than on
+        first use."""
+    @property
+    def sensor(self) -> Sensor: ...
+    @property
+    def host(self) -> str:
+        """CPU, adapter and driver the frames are rendered on."""
+    def reference(self) -> _Image:
+        """The empty finger (H, W, 3) uint8, as `geltip render --reference`."""
+    def render(
+        self,
+        *,
+        object: Optional[_Path] = None,
+        at: Optional[_Place] = None,
+        rotation: Optional[_Number] = None,
+        translation: Optional[_Number] = None,
+        s: Optional[_Number] = None,
+        azimuth: Optional[_Number] = None,
+        spin: Optional[_Number] = None,
+        tilt: Optional[_Number] = None,
+        tilt_towards: Optional[_Number] = None,
+        depth: Optional[_Number] = None,
+        pose: Union[str, npt.ArrayLike, None] = None,
+    ) -> Tuple[_Image, Labels, _Depth]:
+        """One contact -> (image (H, W, 3) uint8, labels, depth map (H, W) float32 mm): the
+        bytes `geltip render` writes for the same flags. Place: exactly one of `at`,
+        `rotation` (deg about the tip), `translation` (mm below the junction), `s` (mm of
+        arc from the tip); or `pose` (16 numbers: a row-major 4x4 matrix, or 7: x y z qw qx
+        qy qz) instead of a place and depth."""
+    def render_scene(
+        self, contacts: Sequence[Mapping[str, Any]]
+    ) -> Tuple[_Image, Labels, _Depth]:
+        """Several contacts in one frame (`geltip render --scene`); each dict takes
+        `render`'s keyword names."""
+    def render_batch(
+        self,
+        contacts: Sequence[Mapping[str, Any]],
+        *,
+        depth_maps: bool = True,
+        out: Optional[npt.NDArray[np.uint8]] = None,
+        depth_out: Optional[npt.NDArray[np.float32]] = None,
+    ) -> Tuple[npt.NDArray[np.uint8], List[Labels], Optional[npt.NDArray[np.float32]]]:
+        """Many contacts (dicts of `render`'s keyword names, without tilt or pose), batched
+        on the GPU -> (images (N, H, W, 3) uint8, [labels], depth maps (N, H, W) float32 or
+        None with depth_maps=False). Frames are written straight into the arrays; pass
+        `out`/`depth_out` (C-contiguous, of those shapes) to reuse your own."""
+
+def localise(
+    sensor: Sensor, reference: _Image, image: _Image, method: str = "surface"
+) -> Dict[str, Any]:
+    """Finds the contact: {"detected", "pixel", "point", "region", "confidence",
+    "regions_found", "note"}, as `geltip localise` prints. method: "surface" or "paper"."""
+
+def load_image(path: _Path) -> _Image:
+    """Reads an image file (PNG) as (H, W, 3) uint8."""

@@ -1,0 +1,99 @@
+"""`geltip.Dataset`: a map-style dataset over a directory written by `geltip dataset`.
+
+The directory holds `dataset.json` (the manifest), `labels.jsonl` (one JSON object per
+sample), `images/<k>.png` and, when the set was made with `--depth-maps` / `--masks`,
+`depth/<k>.npy` and `masks/<k>.png`. PNGs are read by geltip's own decoder (no Pillow).
+
+With PyTorch installed, `Dataset` is a `torch.utils.data.Dataset` (use it with a
+`DataLoader`: its default collate stacks the NumPy arrays into tensors); without it, a
+plain `collections.abc.Sequence`.
+"""
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Union
+
+import numpy as np
+
+try:  # PyTorch is optional
+    from torch.utils.data import Dataset as _Base  # type: ignore[import-not-found]
+
+    TORCH = True
+except ImportError:  # pragma: no cover - depends on the environment
+    _Base = Sequence  # type: ignore[misc,assignment]
+    TORCH = False
+
+Sample = Dict[str, Any]
+
+
+class Dataset(_Base):  # type: ignore[misc,valid-type]
+    """`Dataset(root)`: sample `i` is a dict with
+
+    - ``index``: the sample's index in the set,
+    - ``image``: (H, W, 3) uint8,
+    - ``labels``: the sample's line of `labels.jsonl` (the ground truth of
+      `geltip render --labels`, plus the sample's files, object and seed),
+    - ``depth``: (H, W) float32 mm, when the set has depth maps,
+    - ``mask``: (H, W) bool, when the set has masks.
+
+    ``transform``, if given, is applied to each sample dict.
+    """
+
+    def __init__(
+        self,
+        root: Union[str, "Path"],
+        transform: Optional[Callable[[Sample], Any]] = None,
+    ) -> None:
+        self.root = Path(root)
+        labels_path = self.root / "labels.jsonl"
+        if not labels_path.is_file():
+            raise FileNotFoundError(
+                f"{labels_path}: no labels.jsonl (is {self.root} a `geltip dataset` directory?)"
+            )
+        manifest = self.root / "dataset.json"
+        self.manifest: Dict[str, Any] = (
+            json.loads(manifest.read_text()) if manifest.is_file() else {}
+        )
+        labels: List[Dict[str, Any]] = []
+        with open(labels_path) as f:
+            for n, line in enumerate(f, 1):
+                if not line.strip():
+                    continue
+                try:
+                    labels.append(json.loads(line))
+                except json.JSONDecodeError:
+                    # A run killed mid-line leaves a torn last line: `geltip dataset` redoes it.
+                    continue
+        labels.sort(key=lambda label: label["index"])
+        self.labels = labels
+        self.transform = transform
+
+    def __len__(self) -> int:
+        return len(self.labels)
+
+    def __getitem__(self, i: int) -> Any:  # type: ignore[override]
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        n = len(self.labels)
+        if not -n <= i < n:
+            raise IndexError(f"sample {i} out of range: the set has {n} samples")
+        label = self.labels[i]
+        sample: Sample = {
+            "index": label["index"],
+            "image": _load_image(self.root / label["image"]),
+            "labels": label,
+        }
+        if label.get("depth"):
+            sample["depth"] = np.load(self.root / label["depth"])
+        if label.get("mask"):
+            sample["mask"] = _load_image(self.root / label["mask"])[..., 0] > 127
+        return self.transform(sample) if self.transform is not None else sample
+
+    def __repr__(self) -> str:
+        return f"geltip.Dataset({str(self.root)!r}, {len(self)} samples)"
+
+
+def _load_image(path: Path) -> np.ndarray:
+    from ._geltip import load_image
+
+    return load_image(path)

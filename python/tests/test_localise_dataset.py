@@ -1,0 +1,151 @@
+"""localise on rendered contacts (within 0.5 mm of the ground truth), and Dataset over a
+small `geltip dataset` set."""
+import json
+
+import numpy as np
+import pytest
+
+import geltip
+
+
+@pytest.mark.parametrize(
+    "contact",
+    [
+        dict(object="sphere", at="rotation=30", depth=1.0),
+        dict(object="cone", at="translation=5", azimuth=120, depth=1.0),
+        dict(object="cylinder", rotation=60, azimuth=250, depth=0.8),
+    ],
+)
+def test_localise_within_half_a_millimetre(sim, sensor, contact):
+    reference = sim.reference()
+    image, labels, _ = sim.render(**contact)
+    found = geltip.localise(sensor, reference, image)
+    assert found["detected"], found
+    truth = np.array(labels["contact_centre"])
+    error = np.linalg.norm(np.array(found["point"]) - truth)
+    assert error < 0.5, (error, found, truth)
+    # The pixel maps onto the same point.
+    point, _, region = sensor.unproject(np.array(found["pixel"]))
+    assert geltip.REGION_NAMES[int(region)] == found["region"]
+    assert np.linalg.norm(point - np.array(found["point"])) < 1e-6
+
+
+def test_localise_matches_cli(sim, sensor, cli, tmp_path):
+    cli("render", "--sensor", "paper", "--reference", "-o", tmp_path / "ref.png")
+    cli("render", "--sensor", "paper", "--object", "edge", "--at", "rotation=45", "--depth",
+        "1", "-o", tmp_path / "e.png")
+    for method in ("surface", "paper"):
+        printed = cli("localise", "--sensor", "paper", "--reference", tmp_path / "ref.png",
+                      "--method", method, tmp_path / "e.png")
+        got = geltip.localise(sensor, geltip.load_image(tmp_path / "ref.png"),
+                              geltip.load_image(tmp_path / "e.png"), method=method)
+        assert got == printed, method
+
+
+def test_no_contact_is_a_result(sim, sensor):
+    reference = sim.reference()
+    found = geltip.localise(sensor, reference, reference.copy())
+    assert found["detected"] is False and found["point"] is None and found["note"]
+
+
+def test_localise_bad_arguments(sim, sensor):
+    reference = sim.reference()
+    with pytest.raises(ValueError, match="^image: expected a \\(480, 640, 3\\) uint8"):
+        geltip.localise(sensor, reference, reference[:100])
+    with pytest.raises(ValueError, match="^image: expected .* dtype float64"):
+        geltip.localise(sensor, reference, reference.astype(np.float64))
+    with pytest.raises(ValueError, match="^reference: expected"):
+        geltip.localise(sensor, "ref.png", reference)
+    with pytest.raises(ValueError, match="^method: unknown 'magic'"):
+        geltip.localise(sensor, reference, reference, method="magic")
+    # A non-contiguous view is accepted.
+    flipped = np.ascontiguousarray(reference[::-1])[::-1]
+    assert geltip.localise(sensor, reference, flipped)["detected"] is False
+
+
+@pytest.fixture(scope="module")
+def dataset_dir(cli, tmp_path_factory):
+    out = tmp_path_factory.mktemp("set")
+    cli("dataset", "--sensor", "paper", "--count", "5", "--seed", "3", "--out", out,
+        "--depth-maps", "--masks", "--objects", "sphere,cone")
+    return out
+
+
+def test_dataset_reads_a_geltip_set(dataset_dir):
+    ds = geltip.Dataset(dataset_dir)
+    assert len(ds) == 5
+    lines = [json.loads(l) for l in (dataset_dir / "labels.jsonl").read_text().splitlines()]
+    for i in range(len(ds)):
+        sample = ds[i]
+        assert sample["index"] == i and sample["labels"] == lines[i]
+        assert sample["image"].shape == (480, 640, 3) and sample["image"].dtype == np.uint8
+        assert sample["depth"].shape == (480, 640) and sample["depth"].dtype == np.float32
+        assert sample["mask"].dtype == bool
+        # The mask is the label's pixel count, and the depth map's pressed pixels.
+        assert int(sample["mask"].sum()) == lines[i]["mask_pixels"]
+        np.testing.assert_array_equal(sample["mask"], sample["depth"] > 0.01)
+    assert ds[-1]["index"] == 4 and [s["index"] for s in ds[1:3]] == [1, 2]
+    with pytest.raises(IndexError):
+        ds[5]
+    assert sum(1 for _ in ds) == 5
+    assert ds.manifest["options"]["count"] == 5
+
+
+def test_dataset_matches_a_render(dataset_dir, sim):
+    """A sample's image is what the simulator renders for its label's contact (no noise,
+    no jitter in this set)."""
+    label = geltip.Dataset(dataset_dir)[0]["labels"]
+    image, _, _ = sim.render(object=label["object"], s=label["s_mm"],
+                             azimuth=label["azimuth_deg"], spin=label["spin_deg"],
+                             depth=label["depth_mm"])
+    np.testing.assert_array_equal(image, geltip.Dataset(dataset_dir)[0]["image"])
+
+
+def test_dataset_without_labels(tmp_path):
+    with pytest.raises(FileNotFoundError, match="labels.jsonl"):
+        geltip.Dataset(tmp_path)
+
+
+def test_dataset_is_a_torch_dataset_when_torch_imports(dataset_dir):
+    from geltip import dataset
+
+    if dataset.TORCH:
+        import torch.utils.data
+
+        assert isinstance(geltip.Dataset(dataset_dir), torch.utils.data.Dataset)
+    else:
+        from collections.abc import Sequence
+
+        assert isinstance(geltip.Dataset(dataset_dir), Sequence)
+
+
+def test_dataset_subclasses_torch_dataset(dataset_dir, monkeypatch):
+    """With PyTorch importable, Dataset is a torch.utils.data.Dataset (checked here with a
+    stand-in torch module when PyTorch is not installed)."""
+    import importlib
+    import sys
+    import types
+
+    import geltip.dataset
+
+    if not geltip.dataset.TORCH:
+        class FakeTorchDataset:
+            pass
+
+        torch = types.ModuleType("torch")
+        utils = types.ModuleType("torch.utils")
+        data = types.ModuleType("torch.utils.data")
+        data.Dataset = FakeTorchDataset
+        torch.utils, utils.data = utils, data
+        for name, module in [("torch", torch), ("torch.utils", utils), ("torch.utils.data", data)]:
+            monkeypatch.setitem(sys.modules, name, module)
+    try:
+        reloaded = importlib.reload(geltip.dataset)
+        import torch.utils.data
+
+        ds = reloaded.Dataset(dataset_dir)
+        assert reloaded.TORCH and isinstance(ds, torch.utils.data.Dataset)
+        assert len(ds) == 5 and ds[2]["index"] == 2
+    finally:
+        monkeypatch.undo()
+        importlib.reload(geltip.dataset)
