@@ -20,6 +20,7 @@
 //! and a per-sample sensor would need a new renderer (1-2 s) per sample.
 
 use crate::error::{GeltipError, Result};
+use crate::finger::SurfaceCoord;
 use crate::object::{Object, Solid};
 use crate::output::{self, LineLog, PngColor};
 use crate::render::gpu::{Renderer, MAX_BATCH};
@@ -369,10 +370,14 @@ pub fn sample_contact(
         let depth = rng.uniform(depth_range.0, depth_range.1);
         let spin = rng.uniform(0.0, 360.0);
         let object = &objects[(rng.next_u64() % objects.len() as u64) as usize];
-        let contact = make_contact(object.clone(), s, azimuth, spin, depth);
-        let pose = contact.pose(sensor)?;
-        if sensor.project(pose.point).is_ok() {
-            return Ok(contact);
+        // The contact point is the surface point at (s, azimuth) whatever the object: no
+        // first-touch search here (the renderer does it once, when it prepares the frame).
+        let point = sensor.finger.point_at(SurfaceCoord {
+            s,
+            phi: azimuth.to_radians(),
+        });
+        if sensor.project(point.point).is_ok() {
+            return Ok(make_contact(object.clone(), s, azimuth, spin, depth));
         }
     }
     Err(GeltipError::input(
