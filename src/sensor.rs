@@ -155,7 +155,7 @@ impl Default for RenderConfig {
     fn default() -> Self {
         RenderConfig {
             heightfield_texels: 256,
-            ray_steps: 8,
+            ray_steps: 4,
             blend_tap_spacing: 1.0,
             noise: 0.0,
             noise_seed: 0,
