@@ -518,3 +518,58 @@ fn labels_from_the_gpu_field_match_the_cpu_field() {
     check("scene, shallow", &truths[1], &shallow);
     assert!(truths[1].indentation_reached_mm < truths[0].indentation_reached_mm - 0.3);
 }
+
+/// The footprint scan prunes blocks of cells with `contact::may_touch`: it must hold for every
+/// block that contains a point `contact::penetration` finds pressed (the old scan's sphere
+/// trace could step over a thin band within its tolerance; `may_touch` traces the grown
+/// object instead). Checked on points around several contacts, blocks of 2.2 mm.
+#[test]
+fn may_touch_covers_every_pressed_point_of_its_block() {
+    let sensor = Sensor::preset("paper").unwrap();
+    let f = &sensor.finger;
+    let drape = sensor.config.elastomer.drape_mm;
+    let half = 2.2 * std::f64::consts::FRAC_1_SQRT_2;
+    let mut checked = 0;
+    for (solid, place) in [
+        (Solid::Sphere, Place::Translation(0.0)),
+        (Solid::Cone, Place::Rotation(30.0)),
+        (Solid::Edge, Place::Translation(10.0)),
+        (Solid::Tube, Place::Rotation(60.0)),
+    ] {
+        let p = press(solid, place, 30.0, 1.0);
+        let pose = p.pose(&sensor).unwrap();
+        let depth = pose.trace_depth_mm;
+        let tolerance = half * (1.0 + (depth + drape) / f.radius) + contact::TRACE_EPSILON_MM;
+        let centre = pose.coord.to_disc();
+        for bj in -6..=6 {
+            for bi in -6..=6 {
+                let block = centre + glam::DVec2::new(bi as f64, bj as f64) * 2.2;
+                let touched = contact::may_touch(
+                    f,
+                    &pose,
+                    &p.object,
+                    geltip::SurfaceCoord::from_disc(block),
+                    depth,
+                    drape,
+                    tolerance,
+                );
+                for k in 0..25 {
+                    let offset = glam::DVec2::new((k % 5) as f64 - 2.0, (k / 5) as f64 - 2.0) * 0.5;
+                    let at = geltip::SurfaceCoord::from_disc(block + offset);
+                    let pressed = contact::penetration(
+                        f,
+                        &pose,
+                        &p.object,
+                        at,
+                        depth,
+                        drape,
+                        contact::TRACE_EPSILON_MM,
+                    ) > 0.0;
+                    assert!(!pressed || touched, "{solid:?}: block {bi},{bj} point {k}");
+                    checked += pressed as usize;
+                }
+            }
+        }
+    }
+    assert!(checked > 200, "only {checked} pressed points");
+}

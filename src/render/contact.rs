@@ -55,6 +55,36 @@ pub fn penetration(
     0.0
 }
 
+/// Whether the object grown by `drape + tolerance` reaches the inward normal at `coord`
+/// deeper than `drape` (within `max_depth + drape`): true for every coord within
+/// `tolerance` of a point [`penetration`] finds pressed. Sphere tracing by the grown SDF,
+/// so that no region within the tolerance is stepped over; a trace that runs out of steps
+/// counts as touching (this only prunes work).
+pub fn may_touch(
+    finger: &Finger,
+    pose: &ContactPose,
+    object: &Object,
+    coord: SurfaceCoord,
+    max_depth: f64,
+    drape: f64,
+    tolerance: f64,
+) -> bool {
+    let sp = finger.point_at(coord);
+    let mut lambda = max_depth + drape;
+    for _ in 0..MAX_TRACE_STEPS {
+        let q = sp.point - lambda * sp.normal;
+        let d = object.sdf(pose.to_object(q)) - drape - tolerance;
+        if d <= TRACE_EPSILON_MM {
+            return lambda > drape;
+        }
+        lambda -= d;
+        if lambda <= drape {
+            return false;
+        }
+    }
+    true
+}
+
 /// Radius of the surface's parallel circle at arc length `s` from the tip: r sin(s / r) on
 /// the hemisphere, r on the cylinder. Azimuthal distances on the surface are rho(s) dphi.
 pub fn parallel_radius(finger: &Finger, s: f64) -> f64 {
@@ -161,6 +191,37 @@ pub fn footprint(
     };
     let s_lo = s_of_height(pose.origin.z + reach) - 1e-3;
     let s_hi = (s_of_height(pose.origin.z - reach) + 1e-3).min(grid.half_size_mm);
+    // Blocks of BLOCK x BLOCK cells first, each traced with its own (larger) tolerance: a
+    // block none of whose surface points can be touched holds no touched cell, so only the
+    // cells of touched blocks are traced (the marks are those of tracing every cell).
+    const BLOCK: u32 = 4;
+    let blocks = cells.div_ceil(BLOCK);
+    let block_mm = cell_mm * BLOCK as f64;
+    // Every surface point of a block lies within its half diagonal of the centre's, and its
+    // normal within half diagonal / radius of the centre's normal, so a point traced
+    // max_depth + drape in along it lies at most that much further off.
+    let half_diagonal = block_mm * std::f64::consts::FRAC_1_SQRT_2;
+    let block_tolerance = half_diagonal * (1.0 + (max_depth + drape) / f.radius) + TRACE_EPSILON_MM;
+    let block_reach = reach - tolerance + half_diagonal + TRACE_EPSILON_MM;
+    let mut touched_blocks = vec![false; (blocks * blocks) as usize];
+    touched_blocks
+        .par_chunks_mut(blocks as usize)
+        .enumerate()
+        .for_each(|(bj, row)| {
+            for (bi, mark) in row.iter_mut().enumerate() {
+                let c = DVec2::new(bi as f64 + 0.5, bj as f64 + 0.5) * block_mm
+                    - DVec2::splat(grid.half_size_mm);
+                let s = c.length();
+                if s < s_lo - block_tolerance || s > s_hi + block_tolerance {
+                    continue;
+                }
+                let coord = SurfaceCoord::from_disc(c);
+                if (f.point_at(coord).point - pose.origin).length() > block_reach {
+                    continue;
+                }
+                *mark = may_touch(f, pose, object, coord, max_depth, drape, block_tolerance);
+            }
+        });
     // Rows of cells in parallel: the GPU waits for this (prepare is on the frame's path).
     let mut marked = vec![false; (cells * cells) as usize];
     marked
@@ -169,6 +230,9 @@ pub fn footprint(
         .for_each(|(cj, row)| {
             for (ci, mark) in row.iter_mut().enumerate() {
                 let (ci, cj) = (ci as u32, cj as u32);
+                if !touched_blocks[((cj / BLOCK) * blocks + ci / BLOCK) as usize] {
+                    continue;
+                }
                 let s = centre(ci, cj).length();
                 if s < s_lo || s > s_hi {
                     continue;
