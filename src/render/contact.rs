@@ -559,9 +559,15 @@ pub fn first_touch(
     let &(mut best, mut best_t) = samples.iter().max_by(|x, y| x.1.total_cmp(&y.1))?;
     // Pattern search on the surface around the best sample: steps along the meridian and
     // the parallel (as arc lengths), halved when no neighbour is better.
+    // Pattern search (Hooke and Jeeves): explore one step along the meridian and the
+    // parallel; after a move that improves, keep going the way it went, twice as far each
+    // time while that improves. Along a ridge (an edge or a rim lying on the surface) the
+    // offset rises so slowly that a search with exploratory steps alone crawled along it
+    // for up to hundreds of thousands of steps; the pattern moves walk it in a few.
     let mut step = FIRST_TOUCH_SAMPLE_MM;
     while step > FIRST_TOUCH_TOLERANCE_MM {
         let rho = parallel_radius(finger, best.s).max(1e-6);
+        let start = best;
         let mut moved = false;
         for (ds, dphi) in [
             (step, 0.0),
@@ -581,6 +587,21 @@ pub fn first_touch(
         }
         if !moved {
             step *= 0.5;
+            continue;
+        }
+        let (mut ds, mut dphi) = (best.s - start.s, best.phi - start.phi);
+        loop {
+            let coord = SurfaceCoord {
+                s: (best.s + ds).clamp(0.0, half),
+                phi: best.phi + dphi,
+            };
+            match eval(coord) {
+                Some(t) if t > best_t + 1e-12 => {
+                    (best, best_t) = (coord, t);
+                    (ds, dphi) = (2.0 * ds, 2.0 * dphi);
+                }
+                _ => break,
+            }
         }
     }
     // The offset is known to the tolerance: a top point on the normal touches at 0 exactly
