@@ -480,33 +480,19 @@ fn labels_from_the_gpu_field_match_the_cpu_field() {
             want.area_mm2
         );
     };
-    let contacts = [
-        press(Solid::Sphere, Place::Rotation(0.0), 0.0, 1.0),
-        press(Solid::Cone, Place::Rotation(60.0), 45.0, 0.8),
-        press(Solid::Slab, Place::Translation(10.0), 200.0, 0.6),
+    let contact = |solid, place, azimuth_deg, depth_mm| geltip::render::Contact {
+        object: Arc::new(Object::Solid(solid)),
+        place,
+        azimuth_deg,
+        spin_deg: 0.0,
+        depth_mm,
+    };
+    let plain = [
+        contact(Solid::Sphere, Place::Rotation(0.0), 0.0, 1.0),
+        contact(Solid::Cone, Place::Rotation(60.0), 45.0, 0.8),
+        contact(Solid::Slab, Place::Translation(10.0), 200.0, 0.6),
     ];
-    let plain: Vec<geltip::render::Contact> = contacts
-        .iter()
-        .map(|p| {
-            let Hold::Surface {
-                place,
-                azimuth_deg,
-                spin_deg,
-                depth_mm,
-                ..
-            } = p.hold
-            else {
-                unreachable!()
-            };
-            geltip::render::Contact {
-                object: p.object.clone(),
-                place,
-                azimuth_deg,
-                spin_deg,
-                depth_mm,
-            }
-        })
-        .collect();
+    let contacts: Vec<Press> = plain.iter().map(Press::from).collect();
     let batch = r.render_batch(&plain).unwrap();
     for ((_, t), p) in batch.iter().zip(&contacts) {
         check(&format!("batch {}", t.place), t, p);

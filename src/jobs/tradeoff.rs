@@ -430,9 +430,8 @@ pub fn run(
     }
     drop(timed);
     // A configuration that misses contacts is scored as if each miss were 10 mm off.
-    let point = |r: &Row, errors: Vec<f64>| (r.fps, errors);
     let front = |errors: &dyn Fn(&Row) -> Vec<f64>, ties: Vec<f64>| {
-        let points: Vec<(f64, Vec<f64>)> = rows.iter().map(|r| point(r, errors(r))).collect();
+        let points: Vec<(f64, Vec<f64>)> = rows.iter().map(|r| (r.fps, errors(r))).collect();
         pareto_front_within(
             &points,
             &Tolerance {

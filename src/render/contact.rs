@@ -39,20 +39,20 @@ pub fn penetration(
     drape: f64,
     hit_tolerance: f64,
 ) -> f64 {
-    let sp = finger.point_at(coord);
-    let mut lambda = max_depth + drape;
-    for _ in 0..MAX_TRACE_STEPS {
-        let q = sp.point - lambda * sp.normal;
-        let d = object.sdf(pose.to_object(q)) - drape;
-        if d <= hit_tolerance {
-            return (lambda - drape).max(0.0);
-        }
-        lambda -= d;
-        if lambda < drape {
-            return 0.0;
-        }
+    // A hit at lambda <= drape is no press, as is a trace that stops there.
+    match trace_inward(
+        finger,
+        pose,
+        object,
+        coord,
+        max_depth + drape,
+        drape,
+        hit_tolerance,
+        drape,
+    ) {
+        Trace::Hit(lambda) => (lambda - drape).max(0.0),
+        Trace::Missed | Trace::OutOfSteps => 0.0,
     }
-    0.0
 }
 
 /// Whether the object grown by `drape + tolerance` reaches the inward normal at `coord`
@@ -69,20 +69,60 @@ pub fn may_touch(
     drape: f64,
     tolerance: f64,
 ) -> bool {
+    let start = max_depth + drape;
+    match trace_inward(
+        finger,
+        pose,
+        object,
+        coord,
+        start,
+        drape + tolerance,
+        TRACE_EPSILON_MM,
+        drape,
+    ) {
+        Trace::Hit(lambda) => lambda > drape,
+        Trace::Missed => false,
+        Trace::OutOfSteps => true,
+    }
+}
+
+/// How a trace along a surface normal ended.
+enum Trace {
+    /// The grown object's surface, at this distance along the inward normal.
+    Hit(f64),
+    /// Nothing before `floor`.
+    Missed,
+    /// MAX_TRACE_STEPS steps without an answer (grazing).
+    OutOfSteps,
+}
+
+/// Sphere-traces the object grown by `grow` (its SDF minus `grow`) along the inward normal
+/// at `coord`, from `start` inwards: a hit where the grown SDF falls to `hit`, a miss once
+/// the trace reaches `floor`. Shared by [`penetration`] and [`may_touch`].
+#[allow(clippy::too_many_arguments)]
+fn trace_inward(
+    finger: &Finger,
+    pose: &ContactPose,
+    object: &Object,
+    coord: SurfaceCoord,
+    start: f64,
+    grow: f64,
+    hit: f64,
+    floor: f64,
+) -> Trace {
     let sp = finger.point_at(coord);
-    let mut lambda = max_depth + drape;
+    let mut lambda = start;
     for _ in 0..MAX_TRACE_STEPS {
-        let q = sp.point - lambda * sp.normal;
-        let d = object.sdf(pose.to_object(q)) - drape - tolerance;
-        if d <= TRACE_EPSILON_MM {
-            return lambda > drape;
+        let d = object.sdf(pose.to_object(sp.point - lambda * sp.normal)) - grow;
+        if d <= hit {
+            return Trace::Hit(lambda);
         }
         lambda -= d;
-        if lambda <= drape {
-            return false;
+        if lambda <= floor {
+            return Trace::Missed;
         }
     }
-    true
+    Trace::OutOfSteps
 }
 
 /// Radius of the surface's parallel circle at arc length `s` from the tip: r sin(s / r) on
