@@ -7,11 +7,14 @@
 const BISECTION_STEPS: u32 = 6u;
 
 // Where a ray's stretch of shell is probed for deformation: its ends and middle, as disc
-// positions. Mirror: src/render/camera.rs UNTOUCHED_PROBES.
+// positions, and where it enters the gel and leaves the highest bulge (t_in, t_out along the
+// ray). Mirror: src/render/camera.rs ray_probes, UNTOUCHED_PROBES.
 struct Probes {
     a: vec2<f32>,
     b: vec2<f32>,
     c: vec2<f32>,
+    t_in: f32,
+    t_out: f32,
 }
 
 fn ray_probes(dir: vec3<f32>) -> Probes {
@@ -21,7 +24,18 @@ fn ray_probes(dir: vec3<f32>) -> Probes {
         disc_of_point(t_in * dir),
         disc_of_point(0.5 * (t_in + t_out) * dir),
         disc_of_point(t_out * dir),
+        t_in,
+        t_out,
     );
+}
+
+// The probes the reference frame kept for pixel (x, y): two texels of the probe map,
+// (a, b) and (c, t_in, t_out); t_in is 0 where the lens sees nothing (a seen pixel's ray
+// enters the gel some way from the camera).
+fn load_probes(x: u32, y: u32) -> Probes {
+    let p0 = textureLoad(probe_map, vec2<u32>(2u * x, y), 0);
+    let p1 = textureLoad(probe_map, vec2<u32>(2u * x + 1u, y), 0);
+    return Probes(p0.xy, p0.zw, p1.xy, p1.z, p1.w);
 }
 
 fn height_at_disc(u: vec2<f32>) -> f32 {
@@ -102,23 +116,25 @@ struct SkinHit {
     valid: bool,
 }
 
-fn cast_ray(px: vec2<f32>) -> SkinHit {
+// The skin a listed pixel sees, from its probes as the reference frame left them (no lens
+// or shell geometry recomputed but the ray itself).
+fn cast_ray(px: vec2<f32>, probes: Probes) -> SkinHit {
     var hit: SkinHit;
     hit.valid = false;
     let ray = pixel_ray(px);
-    if ray.w == 0.0 {
+    if ray.w == 0.0 || probes.t_in == 0.0 {
         return hit;
     }
     let dir = ray.xyz;
-    let t_in = capsule_hit(dir, -sensor.shell_thickness);
-    // Bulges rise up to half the shell thickness above the surface.
-    let t_out = capsule_hit(dir, 0.5 * sensor.shell_thickness);
+    let t_in = probes.t_in;
+    let t_out = probes.t_out;
     var t_hit = capsule_hit(dir, 0.0);
     // Most rays cross untouched skin: then the skin is the surface itself, exactly, with no
     // march (the reference frame is all such rays, so a frame's untouched pixels match it).
     // Over barely moved skin the surface point pushed in along its normal is as good as the
     // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
-    let deepest = probes_depth(ray_probes(dir));
+    let h_in = height_at_disc(probes.a);
+    let deepest = max(abs(h_in), max(abs(height_at_disc(probes.b)), abs(height_at_disc(probes.c))));
     if deepest < SHALLOW_MM {
         let c = coord_of(t_hit * dir);
         hit.indentation = height_at(c);
@@ -130,23 +146,26 @@ fn cast_ray(px: vec2<f32>) -> SkinHit {
     }
     // Bracket first, refine after: on a SIMD device (llvmpipe runs 8 pixels per lane group
     // and executes both sides of every branch) a refinement inside the stepping loop would
-    // cost every pixel the bisection at every step.
-    let steps = sensor.ray_steps;
+    // cost every pixel the bisection at every step. The gaps at the bracket's ends come from
+    // the march (at t_in the ray is on the shell's inner face, T deep: probe a).
     var lo = t_in;
     var hi = t_in;
+    var g_lo = sensor.shell_thickness - h_in;
+    var g_hi = g_lo;
     var found = false;
-    for (var k = 1u; k <= steps; k++) {
-        let t = t_in + (t_out - t_in) * f32(k) / f32(steps);
-        if gap(t, dir) < 0.0 {
+    for (var k = 1u; k <= RAY_STEPS; k++) {
+        let t = t_in + (t_out - t_in) * f32(k) / f32(RAY_STEPS);
+        let g = gap(t, dir);
+        if g < 0.0 {
             hi = t;
+            g_hi = g;
             found = true;
             break;
         }
         lo = t;
+        g_lo = g;
     }
     if found {
-        var g_lo = gap(lo, dir);
-        var g_hi = gap(hi, dir);
         for (var b = 0u; b < BISECTION_STEPS; b++) {
             let mid = 0.5 * (lo + hi);
             let g = gap(mid, dir);
@@ -186,7 +205,7 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
     write_pixel(i, shade(point, surface_normal(coord_of(point)), dir), 0.0);
     let p = ray_probes(dir);
     probes[PROBES_STRIDE * i] = vec4<f32>(p.a, p.b);
-    probes[PROBES_STRIDE * i + 1u] = vec4<f32>(p.c, 1.0, 0.0);
+    probes[PROBES_STRIDE * i + 1u] = vec4<f32>(p.c, p.t_in, p.t_out);
 }
 
 // A contact frame, first pass over its pixel rect: the pixels whose ray's stretch of shell
@@ -202,9 +221,8 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
     let x = frame.pixel_rect.x + id.x;
     let y = frame.pixel_rect.y + id.y;
     let pixel = y * sensor.image_size.x + x;
-    let p0 = textureLoad(probe_map, vec2<u32>(2u * x, y), 0);
-    let p1 = textureLoad(probe_map, vec2<u32>(2u * x + 1u, y), 0);
-    if p1.z == 0.0 || probes_depth(Probes(p0.xy, p0.zw, p1.xy)) == 0.0 {
+    let p = load_probes(x, y);
+    if p.t_in == 0.0 || probes_depth(p) == 0.0 {
         return;
     }
     let k = atomicAdd(&counters[TOUCHED_COUNT], 1u);
@@ -229,7 +247,9 @@ fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let pixel = atomicLoad(&counters[TOUCHED_LIST + k]);
-    let hit = cast_ray(vec2<f32>(f32(pixel % sensor.image_size.x), f32(pixel / sensor.image_size.x)));
+    let x = pixel % sensor.image_size.x;
+    let y = pixel / sensor.image_size.x;
+    let hit = cast_ray(vec2<f32>(f32(x), f32(y)), load_probes(x, y));
     if !hit.valid {
         write_pixel(pixel, vec3<f32>(0.0), 0.0);
         return;

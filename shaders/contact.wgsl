@@ -1,7 +1,8 @@
 //! use shared/common.wgsl
 //! use shared/object.wgsl
 // Stage 1, contact: penetration of the object into the skin along the surface normal, per
-// heightfield texel of the contact's footprint (frame.texel_rect). Mirror: src/render/contact.rs.
+// heightfield texel the object can press (frame.pressed_rect, inside the footprint's
+// texel_rect; the frame starts from zero there). Mirror: src/render/contact.rs.
 
 const MAX_TRACE_STEPS: u32 = 48u;
 const TRACE_EPSILON_MM: f32 = 1e-3;
@@ -71,11 +72,11 @@ fn penetration_at(c: vec2<f32>) -> f32 {
 
 @compute @workgroup_size(8, 8)
 fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
+    if id.x >= frame.pressed_rect.z || id.y >= frame.pressed_rect.w {
         return;
     }
-    let i = frame.texel_rect.x + id.x;
-    let j = frame.texel_rect.y + id.y;
+    let i = frame.pressed_rect.x + id.x;
+    let j = frame.pressed_rect.y + id.y;
     // One sample per texel is enough: the drape makes the skin continuous at object edges.
     let c = coord_of_disc(texel_centre(i, j));
     var p = 0.0;

@@ -25,7 +25,7 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     if length(u) > 0.0 {
         dir = u / length(u);
     }
-    let taps = i32(sensor.blend_taps);
+    let taps = BLEND_TAPS;
     let step = sensor.reach_mm / f32(taps);
     var acc = vec2<f32>(0.0);
     for (var k = -taps; k <= taps; k++) {
@@ -47,7 +47,7 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     let rho = parallel_radius(c.x);
     var v = elastomer_scratch[idx].xy;
     if rho > 1e-6 {
-        let taps = i32(sensor.blend_taps);
+        let taps = BLEND_TAPS;
         let step = sensor.reach_mm / f32(taps);
         var acc = vec2<f32>(0.0);
         // Walk the parallel by rotating the disc position one tap at a time (one sine and

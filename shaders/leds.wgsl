@@ -33,7 +33,7 @@ fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = id.y * sensor.image_size.x + id.x;
-    // The reference frame marked the pixels the lens sees (camera.wgsl camera).
+    // The reference frame left t_in = 0 where the lens sees nothing (camera.wgsl camera).
     if textureLoad(probe_map, vec2<u32>(2u * id.x + 1u, id.y), 0).z == 0.0 {
         return;
     }

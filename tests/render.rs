@@ -224,7 +224,16 @@ fn contact_frame_matches_committed_image() {
 
 #[test]
 fn gpu_matches_the_cpu_pipeline() {
-    let sensor = small_sensor();
+    gpu_matches_cpu(&small_sensor());
+    // Other ray steps and kernel taps (the shaders take them as pipeline constants).
+    let mut c = small_sensor().config.clone();
+    c.render.ray_steps = 7;
+    c.render.blend_tap_spacing = 0.5;
+    gpu_matches_cpu(&Sensor::from_config("small-fine", c).unwrap());
+}
+
+fn gpu_matches_cpu(sensor: &Sensor) {
+    let sensor = sensor.clone();
     let mut r = Renderer::new(&sensor).unwrap();
     let reference = cpu::render(&sensor, None).unwrap();
     let d = diff(&rgb(r.reference()), &rgb(&reference.frame), 3);
@@ -365,8 +374,9 @@ fn a_press_too_shallow_to_move_the_skin_renders_the_empty_finger() {
 }
 
 /// The footprint bounds the work of a contact frame, so it must never cut an imprint short:
-/// over the whole heightfield (not just the footprint), every texel the object pushes in,
-/// and every texel the elastomer then moves, lies inside the texel rectangle, and every pixel
+/// over the whole heightfield (not just the footprint), every texel the object pushes in
+/// lies inside the pressed rectangle (where the contact stage traces), every texel the object
+/// pushes in or the elastomer then moves inside the texel rectangle, and every pixel
 /// that sees such a texel (at the undeformed surface or at the moved skin) inside the pixel
 /// rectangle. Seven solids at the paper's eight positions, at three azimuths and spins, on
 /// the paper's sensor and on a softer gel whose imprints spread and bulge further.
@@ -413,7 +423,7 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
             let pose = c.pose(&sensor).unwrap();
             let fp = render::contact::footprint(&sensor, &grid, &pose, &c.object, reach)
                 .unwrap_or_else(|| panic!("{what}: no footprint"));
-            let (t, px) = (fp.texels, fp.pixels.unwrap());
+            let (t, px, pressed) = (fp.texels, fp.pixels.unwrap(), fp.pressed);
             let p = render::contact::penetration_field(&sensor, &grid, &pose, &c.object, whole);
             // The elastomer over the footprint grown by 30 texels (8 mm) each side.
             let grown = render::Rect {
@@ -432,7 +442,10 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
                 &meridian,
                 grown,
             );
-            let inside = |i: u32, j: u32| i >= t.x && i < t.x + t.w && j >= t.y && j < t.y + t.h;
+            let within = |r: render::Rect, i: u32, j: u32| {
+                i >= r.x && i < r.x + r.w && j >= r.y && j < r.y + r.h
+            };
+            let inside = |i: u32, j: u32| within(t, i, j);
             let mut moved = 0;
             for j in 0..n {
                 for i in 0..n {
@@ -441,6 +454,11 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
                         continue;
                     }
                     moved += 1;
+                    assert!(
+                        p[idx] == 0.0 || within(pressed, i, j),
+                        "{what}: texel ({i}, {j}) is pressed ({}) outside {pressed:?}",
+                        p[idx]
+                    );
                     assert!(
                         inside(i, j),
                         "{what}: texel ({i}, {j}) moves (p {}, h {}) outside {t:?}",

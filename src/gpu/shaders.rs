@@ -249,9 +249,28 @@ pub fn create_compute_pipeline(
     entry_point: &str,
     layout: Option<&wgpu::PipelineLayout>,
 ) -> Result<wgpu::ComputePipeline> {
+    create_compute_pipeline_with(ctx, stage_name, entry_point, layout, &[])
+}
+
+/// [`create_compute_pipeline`] with values for the shader's pipeline-overridable constants
+/// (`override` declarations, by name).
+pub fn create_compute_pipeline_with(
+    ctx: &GpuContext,
+    stage_name: &str,
+    entry_point: &str,
+    layout: Option<&wgpu::PipelineLayout>,
+    constants: &[(&str, f64)],
+) -> Result<wgpu::ComputePipeline> {
     let name = stage_name.strip_suffix(".wgsl").unwrap_or(stage_name);
     let source = compose(name)?;
-    create_compute_pipeline_from_source(ctx, &format!("{name}.wgsl"), &source, entry_point, layout)
+    create_pipeline(
+        ctx,
+        &format!("{name}.wgsl"),
+        &source,
+        entry_point,
+        layout,
+        constants,
+    )
 }
 
 /// [`create_compute_pipeline`] for WGSL `source` (already composed) called `name`.
@@ -265,6 +284,17 @@ pub fn create_compute_pipeline_from_source(
     source: &str,
     entry_point: &str,
     layout: Option<&wgpu::PipelineLayout>,
+) -> Result<wgpu::ComputePipeline> {
+    create_pipeline(ctx, name, source, entry_point, layout, &[])
+}
+
+fn create_pipeline(
+    ctx: &GpuContext,
+    name: &str,
+    source: &str,
+    entry_point: &str,
+    layout: Option<&wgpu::PipelineLayout>,
+    constants: &[(&str, f64)],
 ) -> Result<wgpu::ComputePipeline> {
     let module = validate(name, source)?;
     let computes: Vec<&str> = module
@@ -296,7 +326,10 @@ pub fn create_compute_pipeline_from_source(
                 layout,
                 module: &module,
                 entry_point: Some(entry_point),
-                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 cache: None,
             })
     })

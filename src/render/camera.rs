@@ -179,7 +179,8 @@ pub fn cast_ray(
     // march (the reference frame is all such rays, so a frame's untouched pixels match it).
     // Over barely moved skin the surface point pushed in along its normal is as good as the
     // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
-    let deepest = probes_depth(grid, height, &ray_probes(f, dir)?);
+    let probes = ray_probes(f, dir)?;
+    let deepest = probes_depth(grid, height, &probes);
     if deepest < SHALLOW_MM {
         let surface = t_hit * dir;
         let coord = f.coord_of(surface);
@@ -191,19 +192,24 @@ pub fn cast_ray(
             ray: dir,
         });
     }
-    // Bracket first, refine after (the shader's order: see shaders/camera.wgsl).
+    // Bracket first, refine after (the shader's order: see shaders/camera.wgsl). The gaps at
+    // the bracket's ends come from the march: at t_in the ray is on the shell's inner face,
+    // T deep, over the first probe.
     let mut bracket = None;
-    let mut t_prev = t_in;
+    let mut prev = (
+        t_in,
+        f.shell_thickness - sample_field(height, grid.texels, grid.texel_of(probes[0])),
+    );
     for k in 1..=ray_steps {
         let t = t_in + (t_out - t_in) * k as f64 / ray_steps as f64;
-        if gap(t) < 0.0 {
-            bracket = Some((t_prev, t));
+        let g = gap(t);
+        if g < 0.0 {
+            bracket = Some((prev, (t, g)));
             break;
         }
-        t_prev = t;
+        prev = (t, g);
     }
-    if let Some((mut lo, mut hi)) = bracket {
-        let (mut g_lo, mut g_hi) = (gap(lo), gap(hi));
+    if let Some(((mut lo, mut g_lo), (mut hi, mut g_hi))) = bracket {
         for _ in 0..BISECTION_STEPS {
             let mid = 0.5 * (lo + hi);
             let g = gap(mid);

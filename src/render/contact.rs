@@ -136,11 +136,14 @@ pub fn parallel_radius(finger: &Finger, s: f64) -> f64 {
 }
 
 /// What a contact can change: the heightfield texels its imprint (grown by the elastomer's
-/// reach) covers, and the pixels whose rays can meet them.
+/// reach) covers, and the pixels whose rays can meet them; and the texels the object itself
+/// can press, where the contact stage traces it (inside `texels`; the rest of `texels` is
+/// moved by the elastomer alone).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Footprint {
     pub texels: Rect,
     pub pixels: Option<Rect>,
+    pub pressed: Rect,
 }
 
 /// Bounds of a footprint's samples on the disc and in the image.
@@ -364,6 +367,23 @@ pub fn footprint(
     if disc_lo.x > disc_hi.x {
         return None;
     }
+    // The marked cells' texels (CELL x CELL each), by rows of cells.
+    let (mut c_lo, mut c_hi) = ((u32::MAX, u32::MAX), (0, 0));
+    for (cj, row) in marked.chunks(cells as usize).enumerate() {
+        if let (Some(first), Some(last)) =
+            (row.iter().position(|&m| m), row.iter().rposition(|&m| m))
+        {
+            c_lo = (c_lo.0.min(first as u32), c_lo.1.min(cj as u32));
+            c_hi = (c_hi.0.max(last as u32), c_hi.1.max(cj as u32));
+        }
+    }
+    let texel_end = |c: u32| ((c + 1) * CELL).min(grid.texels);
+    let pressed = Rect {
+        x: c_lo.0 * CELL,
+        y: c_lo.1 * CELL,
+        w: texel_end(c_hi.0) - c_lo.0 * CELL,
+        h: texel_end(c_hi.1) - c_lo.1 * CELL,
+    };
     let texels = Rect::covering(
         grid.texel_of(disc_lo),
         grid.texel_of(disc_hi),
@@ -380,7 +400,12 @@ pub fn footprint(
             (sensor.width, sensor.height),
         )
     };
-    Some(Footprint { texels, pixels })
+    // Every marked cell was grown into `texels`, so `pressed` lies inside it.
+    Some(Footprint {
+        texels,
+        pixels,
+        pressed,
+    })
 }
 
 /// The penetration field over `rect` of a `grid.texels`^2 heightfield (zero elsewhere).

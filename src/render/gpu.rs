@@ -14,7 +14,7 @@ use super::{
 };
 use crate::error::{GeltipError, Result};
 use crate::gpu::readback::{read_buffer, read_ranges_with};
-use crate::gpu::shaders::create_compute_pipeline;
+use crate::gpu::shaders::create_compute_pipeline_with;
 use crate::gpu::GpuContext;
 use crate::object::Object;
 use crate::sensor::Sensor;
@@ -69,13 +69,15 @@ struct Prepared {
     pose: ContactPose,
     texel_rect: Option<Rect>,
     pixel_rect: Option<Rect>,
+    /// Where the contact stage traces the object (inside `texel_rect`).
+    pressed_rect: Option<Rect>,
 }
 
 impl Prepared {
     /// Where this contact's own penetration goes in `penetration_fields` when it starts at
-    /// byte `offset`: (offset, bytes) of its texel rect's rows, or `None` without a rect.
+    /// byte `offset`: (offset, bytes) of its pressed rect's rows, or `None` without a rect.
     fn field_range(&self, offset: u64, texels: u32) -> Option<(u64, u64)> {
-        self.texel_rect
+        self.pressed_rect
             .map(|t| (offset, t.h as u64 * texels as u64 * 4))
     }
 }
@@ -342,8 +344,10 @@ impl Renderer {
                     });
             (layout, pipeline_layout)
         })?;
+        let sensor_uniform = SensorUniform::new(sensor, &grid);
+        let constants = sensor_uniform.pipeline_constants();
         let p = |stage: &str, entry: &str| {
-            create_compute_pipeline(ctx, stage, entry, Some(&pipeline_layout))
+            create_compute_pipeline_with(ctx, stage, entry, Some(&pipeline_layout), &constants)
         };
         let pipelines = Pipelines {
             contact: p("contact", "contact")?,
@@ -356,7 +360,6 @@ impl Renderer {
             add_noise: p("leds", "add_noise")?,
             unproject_pixels: p("camera", "unproject_pixels")?,
         };
-        let sensor_uniform = SensorUniform::new(sensor, &grid);
         let sensor_buffer = ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -707,28 +710,30 @@ impl Renderer {
         }
     }
 
-    /// A contact's heightfield stages over its texel rect `t`: the penetration, the
-    /// elastomer's two passes and the skin's normals, each followed by the copy of what it
-    /// wrote into its map. `region` covers `t` and whatever the maps still hold from the last
-    /// contact, so the maps are zero outside `t` afterwards.
+    /// A contact's heightfield stages: the penetration over `pressed`, then the elastomer's
+    /// two passes and the skin's normals over its texel rect `t`, each followed by the copy
+    /// of what it wrote into its map. `region` covers `t` and whatever the maps still hold
+    /// from the last contact, so the maps are zero outside `t` afterwards.
     fn record_heightfield(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         bind: &wgpu::BindGroup,
-        t: Rect,
+        (t, pressed): (Rect, Rect),
         region: Rect,
         field_offset: u64,
     ) {
         for (k, (_, pipeline, map)) in self.heightfield_stages().into_iter().enumerate() {
-            self.record_texels(encoder, bind, pipeline, map, t, region);
+            let rect = if k == 0 { pressed } else { t };
+            self.record_texels(encoder, bind, pipeline, map, rect, region);
             if k == 0 {
-                self.copy_field(encoder, t, field_offset);
+                self.copy_field(encoder, pressed, field_offset);
             }
         }
     }
 
-    /// Copies the contact pass's own penetration (left in `height` over `t`'s rows) to byte
-    /// `offset` of `penetration_fields`, before the parallels pass overwrites it.
+    /// Copies the contact pass's own penetration (left in `height` over the rows of `t`, its
+    /// pressed rect) to byte `offset` of `penetration_fields`, before the parallels pass
+    /// overwrites it. (Outside `t` those rows may hold another contact's penetration.)
     fn copy_field(&self, encoder: &mut wgpu::CommandEncoder, t: Rect, offset: u64) {
         let row = self.grid.texels as u64 * 4;
         encoder.copy_buffer_to_buffer(
@@ -772,7 +777,7 @@ impl Renderer {
             .into_iter()
             .zip(fields)
             .map(|(p, field)| {
-                let labels = p.texel_rect.map(|rect| {
+                let labels = p.pressed_rect.map(|rect| {
                     contact::indentation_labels(&self.sensor.finger, &self.grid, &field, rect)
                 });
                 ground_truth(&self.sensor, &p.press, &p.pose, labels)
@@ -854,8 +859,6 @@ impl Renderer {
         let pose = press.pose(sensor)?;
         let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
         let footprint = contact::footprint(sensor, &self.grid, &pose, &press.object, reach);
-        let texel_rect = footprint.map(|f| f.texels);
-        let pixel_rect = footprint.and_then(|f| f.pixels);
         let max_depth = pose.trace_depth_mm;
         if let Object::Mesh { grid, .. } = press.object.as_ref() {
             let key = Arc::as_ptr(&press.object) as usize;
@@ -875,20 +878,14 @@ impl Renderer {
                 self.grids.insert(key, (press.object.clone(), buffer));
             }
         }
-        let uniform = FrameUniform::contact(
-            &pose,
-            &press.object,
-            max_depth,
-            texel_rect,
-            pixel_rect,
-            noise_seed,
-        );
+        let uniform = FrameUniform::contact(&pose, &press.object, max_depth, footprint, noise_seed);
         Ok(Prepared {
             uniform,
             press: press.clone(),
             pose,
-            texel_rect,
-            pixel_rect,
+            texel_rect: footprint.map(|f| f.texels),
+            pixel_rect: footprint.and_then(|f| f.pixels),
+            pressed_rect: footprint.map(|f| f.pressed),
         })
     }
 
@@ -952,15 +949,19 @@ impl Renderer {
             total.prepare += start.elapsed();
             let Ran { frames, fields } = self.run(&prepared, &mut total)?;
             let labelled = Instant::now();
+            // Only a contact's pixel rect is ever indented: its mask is counted there.
+            let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect).collect();
             let truths = self.truths(prepared, fields);
-            total.readback += labelled.elapsed();
-            for ((frame, over_pressed_texels), mut truth) in frames.into_iter().zip(truths) {
-                let (count, bbox) = frame.mask();
+            for (((frame, over_pressed_texels), mut truth), rect) in
+                frames.into_iter().zip(truths).zip(pixel_rects)
+            {
+                let (count, bbox) = rect.map_or((0, None), |r| frame.mask_in(r));
                 truth.mask_pixels = count;
                 truth.mask_bbox = bbox;
                 truth.over_pressed = over_pressed_texels > 0;
                 out.push((frame, truth));
             }
+            total.readback += labelled.elapsed();
         }
         self.timings = total;
         Ok(out)
@@ -986,10 +987,16 @@ impl Renderer {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
             self.record_frame_start(&mut encoder, slot as u64, p.pixel_rect);
-            if let Some(t) = p.texel_rect {
+            if let (Some(t), Some(pressed)) = (p.texel_rect, p.pressed_rect) {
                 let region = self.dirty.map_or(t, |d| d.union(&t));
                 self.clear_heightfield(&mut encoder, Some(region));
-                self.record_heightfield(&mut encoder, bind, t, region, field_offsets[slot]);
+                self.record_heightfield(
+                    &mut encoder,
+                    bind,
+                    (t, pressed),
+                    region,
+                    field_offsets[slot],
+                );
                 self.dirty = Some(t);
             }
             if let Some(r) = p.pixel_rect {
@@ -1212,10 +1219,14 @@ impl Renderer {
                     }
                 }
                 Step::Texels(pipeline, map) => {
-                    if let (Some(t), Some(region)) = (p.texel_rect, region) {
-                        self.record_texels(&mut encoder, &bind, pipeline, map, t, region);
-                        if matches!(map, Map::Penetration) {
-                            self.copy_field(&mut encoder, t, 0);
+                    if let (Some(t), Some(pressed), Some(region)) =
+                        (p.texel_rect, p.pressed_rect, region)
+                    {
+                        let contact = matches!(map, Map::Penetration);
+                        let rect = if contact { pressed } else { t };
+                        self.record_texels(&mut encoder, &bind, pipeline, map, rect, region);
+                        if contact {
+                            self.copy_field(&mut encoder, pressed, 0);
                         }
                     }
                 }
@@ -1422,10 +1433,10 @@ impl Renderer {
                 if k == 0 {
                     for ((p, bind), &at) in prepared.iter().zip(&contact_binds).zip(&field_offsets)
                     {
-                        if let Some(t) = p.texel_rect {
-                            let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
+                        if let Some(r) = p.pressed_rect {
+                            let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
                             Self::dispatch(&mut encoder, pipeline, bind, g);
-                            self.copy_field(&mut encoder, t, at);
+                            self.copy_field(&mut encoder, r, at);
                         }
                     }
                 } else {

@@ -643,49 +643,37 @@ impl Frame {
 
     /// Pixel count and bounding box of the contact mask inside `rect`.
     pub fn mask_in(&self, rect: Rect) -> (u64, Option<[u32; 4]>) {
+        let pressed = |d: &f32| *d as f64 > MASK_THRESHOLD_MM;
+        let (u0, u1) = (rect.x.min(self.width), (rect.x + rect.w).min(self.width));
         let mut count = 0;
         let mut bbox: Option<[u32; 4]> = None;
+        // Row by row: a count and the first and last pressed pixel (loops the compiler
+        // vectorises; this runs on every rendered frame).
         for v in rect.y..(rect.y + rect.h).min(self.height) {
-            for u in rect.x..(rect.x + rect.w).min(self.width) {
-                if self.indentation[(v * self.width + u) as usize] as f64 > MASK_THRESHOLD_MM {
-                    count += 1;
-                    bbox = Some(match bbox {
-                        None => [u, v, u, v],
-                        Some([u0, v0, u1, v1]) => [u0.min(u), v0.min(v), u1.max(u), v1.max(v)],
-                    });
-                }
-            }
+            let start = (v * self.width) as usize;
+            let row = &self.indentation[start + u0 as usize..start + u1 as usize];
+            let Some(first) = row.iter().position(pressed) else {
+                continue;
+            };
+            let last = row.iter().rposition(pressed).unwrap_or(first);
+            count += row[first..=last].iter().filter(|d| pressed(d)).count() as u64;
+            let (a, b) = (u0 + first as u32, u0 + last as u32);
+            bbox = Some(match bbox {
+                None => [a, v, b, v],
+                Some([x0, y0, x1, _]) => [x0.min(a), y0, x1.max(b), v],
+            });
         }
         (count, bbox)
     }
 
     /// Pixel count and bounding box of the contact mask.
     pub fn mask(&self) -> (u64, Option<[u32; 4]>) {
-        let pressed = |d: &f32| *d as f64 > MASK_THRESHOLD_MM;
-        // The mask is a small part of the frame: find where it starts and ends first.
-        let Some(first) = self.indentation.iter().position(pressed) else {
-            return (0, None);
-        };
-        let last = self.indentation.iter().rposition(pressed).unwrap_or(first);
-        let mut count = 0;
-        let mut bbox: Option<[u32; 4]> = None;
-        for (i, &d) in self
-            .indentation
-            .iter()
-            .enumerate()
-            .take(last + 1)
-            .skip(first)
-        {
-            if pressed(&d) {
-                count += 1;
-                let (u, v) = (i as u32 % self.width, i as u32 / self.width);
-                bbox = Some(match bbox {
-                    None => [u, v, u, v],
-                    Some([u0, v0, u1, v1]) => [u0.min(u), v0.min(v), u1.max(u), v1.max(v)],
-                });
-            }
-        }
-        (count, bbox)
+        self.mask_in(Rect {
+            x: 0,
+            y: 0,
+            w: self.width,
+            h: self.height,
+        })
     }
 }
 
@@ -911,5 +899,10 @@ mod tests {
         assert_eq!(f.mask(), (4, Some([0, 0, 6, 4])));
         let f = frame(&[(4, 1, 0.5), (1, 3, 0.3), (5, 2, 0.2)]);
         assert_eq!(f.mask(), (3, Some([1, 1, 5, 3])));
+        // Inside a rect: pixels outside it do not count; a rect past the frame is clipped.
+        let rect = |x, y, w, h| Rect { x, y, w, h };
+        assert_eq!(f.mask_in(rect(2, 0, 10, 3)), (2, Some([4, 1, 5, 2])));
+        assert_eq!(f.mask_in(rect(0, 3, 2, 1)), (1, Some([1, 3, 1, 3])));
+        assert_eq!(f.mask_in(rect(0, 0, 1, 9)), (0, None));
     }
 }

@@ -1,6 +1,7 @@
 //! Structs shared with WGSL (`shaders/shared/common.wgsl`): explicitly padded `#[repr(C)]`
 //! Pod types whose sizes are asserted here and whose layout a test checks against naga's.
 
+use super::contact::Footprint;
 use super::{leds, ContactPose, HeightfieldGrid, Rect};
 use crate::object::Object;
 use crate::sensor::Sensor;
@@ -66,9 +67,11 @@ pub struct FrameUniform {
     pub grid_origin: [f32; 4],
     pub noise_seed: u32,
     pub _pad: [u32; 3],
+    /// The texels the contact stage traces: those the object can press.
+    pub pressed_rect: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 144);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 160);
 
 /// `object_kind` of a loaded mesh's baked SDF grid (WGSL `GRID_OBJECT`).
 pub const GRID_OBJECT: u32 = 100;
@@ -141,6 +144,17 @@ impl SensorUniform {
             blend_weights,
         }
     }
+
+    /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
+    /// fields that shape control flow, fixed per sensor so the driver can fold the lens
+    /// switch and unroll the loops.
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 3] {
+        [
+            ("LENS_MODEL", self.lens_model as f64),
+            ("RAY_STEPS", self.ray_steps as f64),
+            ("BLEND_TAPS", self.blend_taps as f64),
+        ]
+    }
 }
 
 impl FrameUniform {
@@ -154,13 +168,12 @@ impl FrameUniform {
         }
     }
 
-    /// A contact over `texel_rect`, re-rendering `pixel_rect`.
+    /// A contact pressing `pressed_rect` and moving `texel_rect`, re-rendering `pixel_rect`.
     pub fn contact(
         pose: &ContactPose,
         object: &Object,
         max_trace_depth: f64,
-        texel_rect: Option<Rect>,
-        pixel_rect: Option<Rect>,
+        footprint: Option<Footprint>,
         noise_seed: u32,
     ) -> Self {
         // Rows of object_from_world = columns of world_from_object.
@@ -180,8 +193,8 @@ impl FrameUniform {
             ),
         };
         FrameUniform {
-            texel_rect: rect4(texel_rect),
-            pixel_rect: rect4(pixel_rect),
+            texel_rect: rect4(footprint.map(|f| f.texels)),
+            pixel_rect: rect4(footprint.and_then(|f| f.pixels)),
             object_x: row(m.x_axis),
             object_y: row(m.y_axis),
             object_z: row(m.z_axis),
@@ -196,6 +209,7 @@ impl FrameUniform {
             grid_origin,
             noise_seed,
             _pad: [0; 3],
+            pressed_rect: rect4(footprint.map(|f| f.pressed)),
         }
     }
 }
