@@ -5,12 +5,11 @@
 // max(wide - narrow, 0), capped to [-T/2, T]. Separable passes along the surface (meridians,
 // then parallels), kernels in surface millimetres. Mirror: src/render/elastomer.rs.
 
+// Each Gaussian samples at its own taps (the wide one's twice as far apart): the narrow
+// blend reads channel x, the wide one channel y. Mirror: src/render/elastomer.rs Kernel.
+
 fn sample_penetration(t: vec2<f32>) -> f32 {
     return sample_map_x(penetration_map, t);
-}
-
-fn sample_meridian(t: vec2<f32>) -> vec2<f32> {
-    return sample_map_xy(elastomer_map, t);
 }
 
 @compute @workgroup_size(8, 8)
@@ -25,14 +24,27 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     if length(u) > 0.0 {
         dir = u / length(u);
     }
-    let taps = BLEND_TAPS;
-    let step = sensor.reach_mm / f32(taps);
-    var acc = vec2<f32>(0.0);
-    for (var k = -taps; k <= taps; k++) {
-        let x = f32(k) * step;
-        acc += sensor.blend_weights[abs(k)].xy * sample_penetration(texel_of(u + x * dir));
+    var narrow = 0.0;
+    for (var k = -NARROW_TAPS; k <= NARROW_TAPS; k++) {
+        let x = f32(k) * sensor.narrow_step_mm;
+        narrow += sensor.blend_weights[abs(k)].x * sample_penetration(texel_of(u + x * dir));
     }
-    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(acc, 0.0, 0.0);
+    var wide = 0.0;
+    for (var k = -WIDE_TAPS; k <= WIDE_TAPS; k++) {
+        let x = f32(k) * sensor.wide_step_mm;
+        wide += sensor.blend_weights[abs(k)].y * sample_penetration(texel_of(u + x * dir));
+    }
+    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(narrow, wide, 0.0, 0.0);
+}
+
+// Walks the parallel through disc position (radius s, azimuth phi) by rotating the disc
+// position one tap at a time (one sine and cosine per texel instead of per tap).
+fn parallel_start(c: vec2<f32>, rho: f32, step: f32, taps: i32) -> vec2<f32> {
+    return disc_of(vec2<f32>(c.x, c.y - f32(taps) * step / rho));
+}
+
+fn rotate(u: vec2<f32>, turn: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(u.x * turn.x - u.y * turn.y, u.x * turn.y + u.y * turn.x);
 }
 
 @compute @workgroup_size(8, 8)
@@ -47,18 +59,23 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     let rho = parallel_radius(c.x);
     var v = elastomer_scratch[idx].xy;
     if rho > 1e-6 {
-        let taps = BLEND_TAPS;
-        let step = sensor.reach_mm / f32(taps);
-        var acc = vec2<f32>(0.0);
-        // Walk the parallel by rotating the disc position one tap at a time (one sine and
-        // cosine per texel instead of per tap).
-        let turn = vec2<f32>(cos(step / rho), sin(step / rho));
-        var u = disc_of(vec2<f32>(c.x, c.y - f32(taps) * step / rho));
-        for (var k = -taps; k <= taps; k++) {
-            acc += sensor.blend_weights[abs(k)].xy * sample_meridian(texel_of(u));
-            u = vec2<f32>(u.x * turn.x - u.y * turn.y, u.x * turn.y + u.y * turn.x);
+        let n_step = sensor.narrow_step_mm;
+        let n_turn = vec2<f32>(cos(n_step / rho), sin(n_step / rho));
+        var u = parallel_start(c, rho, n_step, NARROW_TAPS);
+        var narrow = 0.0;
+        for (var k = -NARROW_TAPS; k <= NARROW_TAPS; k++) {
+            narrow += sensor.blend_weights[abs(k)].x * sample_map_x(elastomer_map, texel_of(u));
+            u = rotate(u, n_turn);
         }
-        v = acc;
+        let w_step = sensor.wide_step_mm;
+        let w_turn = vec2<f32>(cos(w_step / rho), sin(w_step / rho));
+        u = parallel_start(c, rho, w_step, WIDE_TAPS);
+        var wide = 0.0;
+        for (var k = -WIDE_TAPS; k <= WIDE_TAPS; k++) {
+            wide += sensor.blend_weights[abs(k)].y * sample_map_y(elastomer_map, texel_of(u));
+            u = rotate(u, w_turn);
+        }
+        v = vec2<f32>(narrow, wide);
     }
     let t = sensor.shell_thickness;
     if penetration[idx] > t {

@@ -38,14 +38,15 @@ struct Sensor {
     shininess: f32,
     noise: f32,
     spread: f32,
-    // Elastomer: the skin's tightest bend (mm) and how far its kernels reach (mm).
+    // Elastomer: the skin's tightest bend (mm) and the surface mm between the narrow and
+    // the wide kernel's taps.
     drape_mm: f32,
-    reach_mm: f32,
-    // Elastomer kernel taps on each side of the centre.
-    blend_taps: u32,
+    narrow_step_mm: f32,
+    wide_step_mm: f32,
+    // Their taps on each side of the centre (read as NARROW_TAPS and WIDE_TAPS).
+    narrow_taps: u32,
+    wide_taps: u32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
     led_position: array<vec4<f32>, 3>,
     led_colour: array<vec4<f32>, 3>,
     // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
@@ -78,14 +79,15 @@ struct Frame {
     pressed_rect: vec4<u32>,
 }
 
-// The sensor's lens model, ray steps and blend taps (the Sensor uniform's lens_model,
-// ray_steps and blend_taps, which the shaders do not read) as pipeline constants, set when
+// The sensor's lens model, ray steps and kernel taps (the Sensor uniform's lens_model,
+// ray_steps, narrow_taps and wide_taps, which the shaders do not read) as pipeline constants, set when
 // the renderer builds its pipelines (SensorUniform::pipeline_constants): the driver folds the
 // lens switch and knows the loops' trip counts (callgrind: 1.2% fewer instructions a
 // contact frame on lavapipe). The defaults are the paper sensor's.
 override LENS_MODEL: u32 = 1u;
 override RAY_STEPS: u32 = 4u;
-override BLEND_TAPS: i32 = 6;
+override NARROW_TAPS: i32 = 3;
+override WIDE_TAPS: i32 = 3;
 
 const GRID_OBJECT: u32 = 100u;
 // object_kind of the reference frame (no object; every pixel is shaded).
@@ -344,13 +346,8 @@ fn sample_map_x(map: texture_2d<f32>, t: vec2<f32>) -> f32 {
     return dot(textureGather(0, map, map_sampler, gather_corner(t)), gather_weights(t));
 }
 
-fn sample_map_xy(map: texture_2d<f32>, t: vec2<f32>) -> vec2<f32> {
-    let w = gather_weights(t);
-    let at = gather_corner(t);
-    return vec2<f32>(
-        dot(textureGather(0, map, map_sampler, at), w),
-        dot(textureGather(1, map, map_sampler, at), w),
-    );
+fn sample_map_y(map: texture_2d<f32>, t: vec2<f32>) -> f32 {
+    return dot(textureGather(1, map, map_sampler, gather_corner(t)), gather_weights(t));
 }
 
 fn sample_map_xyz(map: texture_2d<f32>, t: vec2<f32>) -> vec3<f32> {

@@ -15,27 +15,54 @@ use glam::DVec2;
 /// Most kernel taps on each side of the centre.
 pub const MAX_BLEND_TAPS: i32 = 64;
 
-/// The elastomer's kernels as sampled: how far they reach and how many taps each side.
+/// One Gaussian as sampled: taps `-count..=count`, `step_mm` of surface apart.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Taps {
+    pub count: i32,
+    pub step_mm: f64,
+}
+
+impl Taps {
+    /// Taps every `step` mm out to `reach`, but never closer than one texel (the grid holds
+    /// nothing finer) and at most [`MAX_BLEND_TAPS`] a side.
+    fn reaching(reach: f64, step: f64, texel_mm: f64) -> Taps {
+        let step = step.max(texel_mm);
+        // The epsilon keeps a reach that is a whole number of steps from gaining a tap.
+        let count = ((reach / step - 1e-9).ceil() as i32).clamp(1, MAX_BLEND_TAPS);
+        Taps {
+            count,
+            step_mm: reach / count as f64,
+        }
+    }
+}
+
+/// The elastomer's kernels as sampled: how far they reach, and each Gaussian's taps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Kernel {
     /// Surface distance (mm) the kernels reach: [`blend_reach_mm`].
     pub reach_mm: f64,
-    /// Taps on each side of the centre, spaced `reach_mm / taps` apart.
-    pub taps: i32,
+    /// The narrow Gaussian (sigma `blend_mm`) out to its 3 sigma.
+    pub narrow: Taps,
+    /// The wide Gaussian (twice the sigma) out to its 3 sigma, the kernels' reach.
+    pub wide: Taps,
 }
 
 impl Kernel {
-    /// Taps every `render.blend_tap_spacing` narrow standard deviations (`blend_mm`), but
-    /// never closer than one texel (the grid holds nothing finer) and at most
-    /// [`MAX_BLEND_TAPS`]. A Gaussian sampled once per standard deviation sums to its
-    /// integral within 1e-8 (Poisson summation: exp(-2 pi^2)), so closer taps buy little.
+    /// Each Gaussian tapped every `render.blend_tap_spacing` of its own standard deviations
+    /// out to 3 of them (a Gaussian sampled once per standard deviation sums to its integral
+    /// within 1e-8, Poisson summation: exp(-2 pi^2), so closer taps buy little). The wide
+    /// one's taps lie twice as far apart as the narrow one's, and the narrow one stops at
+    /// its own 3 sigma (half the reach; beyond it its weights sum to 3e-4): 7 + 7 taps on
+    /// the paper's sensor where one shared set of 13 served both.
     pub fn for_config(config: &SensorConfig, grid: &HeightfieldGrid) -> Kernel {
+        let sigma = config.elastomer.blend_mm;
+        let spacing = config.render.blend_tap_spacing;
         let reach_mm = blend_reach_mm(&config.elastomer);
-        let spacing =
-            (config.render.blend_tap_spacing * config.elastomer.blend_mm).max(grid.texel_mm());
-        // The epsilon keeps a reach that is a whole number of spacings from gaining a tap.
-        let taps = ((reach_mm / spacing - 1e-9).ceil() as i32).clamp(1, MAX_BLEND_TAPS);
-        Kernel { reach_mm, taps }
+        Kernel {
+            reach_mm,
+            narrow: Taps::reaching(0.5 * reach_mm, spacing * sigma, grid.texel_mm()),
+            wide: Taps::reaching(reach_mm, 2.0 * spacing * sigma, grid.texel_mm()),
+        }
     }
 }
 
@@ -79,36 +106,55 @@ fn sample_channels(field: &[DVec2], texels: u32, t: DVec2) -> DVec2 {
         .sum()
 }
 
-/// The kernels' weights for taps k = 0..=taps (tap -k weighs as tap k), normalised so that
-/// the taps -taps..=taps sum to one: x the narrow Gaussian (sigma `blend_mm`), y the wide one
-/// (twice as wide). They depend on the tap alone, so the GPU reads them from a table
-/// (`SensorUniform::blend_weights`) instead of evaluating two exponentials per tap.
-pub fn blend_weights(config: &ElastomerConfig, reach: f64, taps: i32) -> Vec<DVec2> {
-    let step = reach / taps as f64;
+/// The kernels' weights by tap k = 0..=max(narrow, wide taps) (tap -k weighs as tap k), each
+/// normalised so that its taps -count..=count sum to one (zero beyond its count): x the
+/// narrow Gaussian (sigma `blend_mm`), y the wide one (twice as wide). They depend on the
+/// tap alone, so the GPU reads them from a table (`SensorUniform::blend_weights`) instead of
+/// evaluating exponentials per tap.
+pub fn blend_weights(config: &ElastomerConfig, kernel: Kernel) -> Vec<DVec2> {
     let sigma = config.blend_mm;
-    let raw: Vec<DVec2> = (0..=taps)
+    let gaussian = |taps: Taps, sigma: f64| -> Vec<f64> {
+        let raw: Vec<f64> = (0..=taps.count)
+            .map(|k| {
+                if sigma > 0.0 {
+                    let q = k as f64 * taps.step_mm / sigma;
+                    (-0.5 * q * q).exp()
+                } else {
+                    (k == 0) as i32 as f64
+                }
+            })
+            .collect();
+        let norm = 2.0 * raw.iter().skip(1).sum::<f64>() + raw[0];
+        raw.into_iter().map(|w| w / norm).collect()
+    };
+    let (narrow, wide) = (
+        gaussian(kernel.narrow, sigma),
+        gaussian(kernel.wide, 2.0 * sigma),
+    );
+    (0..=kernel.narrow.count.max(kernel.wide.count) as usize)
         .map(|k| {
-            if sigma > 0.0 {
-                let q = k as f64 * step / sigma;
-                DVec2::new((-0.5 * q * q).exp(), (-0.125 * q * q).exp())
-            } else {
-                DVec2::splat((k == 0) as i32 as f64)
-            }
+            DVec2::new(
+                narrow.get(k).copied().unwrap_or(0.0),
+                wide.get(k).copied().unwrap_or(0.0),
+            )
         })
-        .collect();
-    let norm = raw.iter().skip(1).sum::<DVec2>() * 2.0 + raw[0];
-    raw.into_iter().map(|w| w / norm).collect()
+        .collect()
 }
 
-/// One separable pass: for samples `sample(x)` at surface offsets x = k * step, the narrow
-/// Gaussian of their x channel and the wide Gaussian of their y channel.
+/// One separable pass: for samples `sample(x)` at surface offsets x, the narrow Gaussian of
+/// their x channel (at its taps) and the wide Gaussian of their y channel (at its own).
 fn pass(config: &ElastomerConfig, kernel: Kernel, mut sample: impl FnMut(f64) -> DVec2) -> DVec2 {
-    let Kernel { reach_mm, taps } = kernel;
-    let step = reach_mm / taps as f64;
-    let weights = blend_weights(config, reach_mm, taps);
-    (-taps..=taps)
-        .map(|k| weights[k.unsigned_abs() as usize] * sample(k as f64 * step))
-        .sum()
+    let weights = blend_weights(config, kernel);
+    let mut one = |taps: Taps, channel: usize| -> f64 {
+        (-taps.count..=taps.count)
+            .map(|k| {
+                weights[k.unsigned_abs() as usize][channel]
+                    * sample(k as f64 * taps.step_mm)[channel]
+            })
+            .sum()
+    };
+    let narrow = one(kernel.narrow, 0);
+    DVec2::new(narrow, one(kernel.wide, 1))
 }
 
 /// Pass 1, along meridians, where disc distance is surface distance: from the penetration,
@@ -201,9 +247,10 @@ mod tests {
     use super::*;
     use crate::sensor::Sensor;
 
-    /// The paper sensor's kernels: 3 mm of reach at one tap per 0.5 mm sigma is 6 taps a
-    /// side (its 0.27 mm texels would give 11); a spacing finer than a texel falls back to
-    /// one tap per texel; and the sampled Gaussians still sum to one.
+    /// The paper sensor's kernels (sigma 0.5 mm, texels 0.27 mm): each Gaussian tapped once
+    /// per its sigma out to 3 sigma is 3 taps a side, the wide one's 1 mm apart; a spacing
+    /// finer than a texel falls back to one tap per texel; and the sampled Gaussians still
+    /// sum to one.
     #[test]
     fn kernel_taps_follow_the_spacing_and_the_texel() {
         let mut c = Sensor::preset("paper").unwrap().config;
@@ -211,14 +258,18 @@ mod tests {
             texels: 256,
             half_size_mm: 35.0,
         };
-        assert_eq!(Kernel::for_config(&c, &grid).taps, 6);
+        let k = Kernel::for_config(&c, &grid);
+        assert_eq!((k.narrow.count, k.wide.count), (3, 3));
+        assert!((k.narrow.step_mm - 0.5).abs() < 1e-12 && (k.wide.step_mm - 1.0).abs() < 1e-12);
+        assert_eq!(k.reach_mm, 3.0);
         c.render.blend_tap_spacing = 0.25;
         let fine = Kernel::for_config(&c, &grid);
-        assert_eq!(fine.taps, (3.0 / grid.texel_mm()).ceil() as i32);
+        assert_eq!(fine.narrow.count, (1.5 / grid.texel_mm()).ceil() as i32);
+        assert_eq!(fine.wide.count, (3.0 / grid.texel_mm()).ceil() as i32);
         c.render.blend_tap_spacing = 2.0;
         let k = Kernel::for_config(&c, &grid);
-        assert_eq!(k.taps, 3);
-        let w = blend_weights(&c.elastomer, k.reach_mm, k.taps);
+        assert_eq!((k.narrow.count, k.wide.count), (2, 2));
+        let w = blend_weights(&c.elastomer, k);
         let total = w.iter().skip(1).sum::<DVec2>() * 2.0 + w[0];
         assert!((total - DVec2::ONE).abs().max_element() < 1e-12);
     }

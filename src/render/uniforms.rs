@@ -37,9 +37,13 @@ pub struct SensorUniform {
     pub noise: f32,
     pub spread: f32,
     pub drape_mm: f32,
-    pub reach_mm: f32,
-    pub blend_taps: u32,
-    pub _pad: [u32; 3],
+    /// Surface mm between the narrow and the wide Gaussian's taps.
+    pub narrow_step_mm: f32,
+    pub wide_step_mm: f32,
+    /// Their taps each side (the shaders take these as pipeline constants).
+    pub narrow_taps: u32,
+    pub wide_taps: u32,
+    pub _pad: u32,
     pub led_position: [[f32; 4]; 3],
     pub led_colour: [[f32; 4]; 3],
     /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
@@ -88,11 +92,10 @@ impl SensorUniform {
         let lights = leds::leds(sensor);
         let f = &sensor.finger;
         let kernel = super::elastomer::Kernel::for_config(c, grid);
-        let (reach, taps) = (kernel.reach_mm, kernel.taps);
         let mut blend_weights = [[0.0f32; 4]; BLEND_WEIGHTS];
         for (slot, w) in blend_weights
             .iter_mut()
-            .zip(super::elastomer::blend_weights(&c.elastomer, reach, taps))
+            .zip(super::elastomer::blend_weights(&c.elastomer, kernel))
         {
             *slot = [w.x as f32, w.y as f32, 0.0, 0.0];
         }
@@ -128,9 +131,11 @@ impl SensorUniform {
             noise: c.render.noise as f32,
             spread: c.leds.spread as f32,
             drape_mm: c.elastomer.drape_mm as f32,
-            reach_mm: reach as f32,
-            blend_taps: taps as u32,
-            _pad: [0; 3],
+            narrow_step_mm: kernel.narrow.step_mm as f32,
+            wide_step_mm: kernel.wide.step_mm as f32,
+            narrow_taps: kernel.narrow.count as u32,
+            wide_taps: kernel.wide.count as u32,
+            _pad: 0,
             led_position: lights.map(|l| {
                 [
                     l.position.x as f32,
@@ -148,11 +153,12 @@ impl SensorUniform {
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
     /// fields that shape control flow, fixed per sensor so the driver can fold the lens
     /// switch and unroll the loops.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 3] {
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 4] {
         [
             ("LENS_MODEL", self.lens_model as f64),
             ("RAY_STEPS", self.ray_steps as f64),
-            ("BLEND_TAPS", self.blend_taps as f64),
+            ("NARROW_TAPS", self.narrow_taps as f64),
+            ("WIDE_TAPS", self.wide_taps as f64),
         ]
     }
 }
