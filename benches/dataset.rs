@@ -48,6 +48,7 @@ fn row(name: &str, r: &dataset::Report) {
 }
 
 fn main() -> anyhow::Result<()> {
+    geltip::memory::keep_freed_memory();
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
     }

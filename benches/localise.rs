@@ -10,6 +10,7 @@ use geltip::sensor::Sensor;
 use std::time::Instant;
 
 fn main() -> anyhow::Result<()> {
+    geltip::memory::keep_freed_memory();
     let sensor = Sensor::preset("paper")?;
     let mut renderer = Renderer::new(&sensor)?;
     let reference = renderer.render_empty()?.to_rgb();

@@ -29,6 +29,7 @@ fn time(sensor: &Sensor, list: &[Contact]) -> anyhow::Result<(f64, f64)> {
 }
 
 fn main() -> anyhow::Result<()> {
+    geltip::memory::keep_freed_memory();
     let sensor = Sensor::preset("paper")?;
     println!("geltip prepare benchmark: sensor paper, per contact (ms), rayon over the cores");
     println!("| contacts | n | pose ms | footprint ms |");

@@ -108,6 +108,9 @@ where
 }
 
 fn main() -> anyhow::Result<()> {
+    // As the geltip binary does (see geltip::memory); GELTIP_FREE_MEMORY=1 measures without.
+    let kept =
+        std::env::var_os("GELTIP_FREE_MEMORY").is_none() && geltip::memory::keep_freed_memory();
     env_logger::init();
     let args: Vec<String> = std::env::args().collect();
     let frames: usize = arg(&args, "--frames")?.unwrap_or(64).max(1);
@@ -117,13 +120,14 @@ fn main() -> anyhow::Result<()> {
     let start = Instant::now();
     let mut r = Renderer::new(&sensor)?;
     println!(
-        "geltip render benchmark on {}: sensor {}, {}x{}, heightfield {}, start-up {:.2} s; median of {repeat} passes",
+        "geltip render benchmark on {}: sensor {}, {}x{}, heightfield {}, start-up {:.2} s; freed frame memory {}; median of {repeat} passes",
         geltip::gpu::host_description(r.adapter()),
         sensor.name,
         sensor.width,
         sensor.height,
         sensor.config.render.heightfield_texels,
-        start.elapsed().as_secs_f64()
+        start.elapsed().as_secs_f64(),
+        if kept { "kept" } else { "returned to the kernel" }
     );
     println!(
         "| {:<28} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} |",

@@ -55,6 +55,7 @@ fn error(a: &Frame, b: &Frame, reference: &Frame) -> (f64, f64) {
 }
 
 fn main() -> anyhow::Result<()> {
+    geltip::memory::keep_freed_memory();
     let list = contacts();
     let mut best = Renderer::new(&sensor(1024, 48)?)?;
     let truth: Vec<Frame> = best

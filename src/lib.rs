@@ -16,6 +16,7 @@ pub use sensor::{NotVisible, Sensor, SensorConfig};
 pub mod gpu;
 pub mod jobs;
 pub mod localise;
+pub mod memory;
 pub mod object;
 pub mod output;
 pub mod plot;

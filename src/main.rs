@@ -350,6 +350,9 @@ fn progress_bar(unit: &str) -> Result<ProgressBar> {
 }
 
 fn main() {
+    // Frames are megabytes each, a new pair per frame: keep freed memory instead of
+    // page-faulting it back in every frame (see geltip::memory).
+    geltip::memory::keep_freed_memory();
     // Mesa's Vulkan loader prints "error: XDG_RUNTIME_DIR is invalid" on headless machines
     // while probing for a Wayland display geltip never uses; point it somewhere harmless.
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
