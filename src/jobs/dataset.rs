@@ -861,17 +861,35 @@ fn render_samples(
                 }
             });
         }
-        let result = (|| -> Result<()> {
+        // The next batch's contacts are drawn and prepared (poses, footprints: CPU work) on
+        // their own thread while the GPU renders this one.
+        let preparer = renderer.preparer();
+        let (prepared_tx, prepared_rx) = mpsc::sync_channel(1);
+        scope.spawn(move || {
             for chunk in todo.chunks(MAX_BATCH) {
                 let t = Instant::now();
-                let contacts = chunk
+                let batch = chunk
                     .iter()
                     .map(|&k| sample_contact(&spec.sensor, objects, spec.depth_range, spec.seed, k))
-                    .collect::<Result<Vec<_>>>()?;
-                split.prepare += t.elapsed();
-                let frames = renderer.render_batch(&contacts)?;
+                    .collect::<Result<Vec<_>>>()
+                    .and_then(|contacts| preparer.prepare(&contacts));
+                let failed = batch.is_err();
+                // A closed channel: the renderer stopped.
+                if prepared_tx
+                    .send(batch.map(|b| (chunk, b, t.elapsed())))
+                    .is_err()
+                    || failed
+                {
+                    return;
+                }
+            }
+        });
+        let result = (|| -> Result<()> {
+            for prepared in prepared_rx {
+                let (chunk, batch, prepare) = prepared?;
+                split.prepare += prepare;
+                let frames = renderer.render_prepared(batch)?;
                 let t = renderer.timings();
-                split.prepare += t.prepare;
                 split.render += t.render;
                 split.readback += t.readback;
                 for (&k, (frame, truth)) in chunk.iter().zip(frames) {

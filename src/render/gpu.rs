@@ -82,6 +82,52 @@ impl Prepared {
     }
 }
 
+/// Contacts prepared for the GPU (poses, footprints, uniforms): made by a [`Preparer`],
+/// rendered by [`Renderer::render_prepared`].
+pub struct PreparedBatch(Vec<Prepared>);
+
+/// The CPU half of rendering, which needs no GPU: a contact's pose (its first-touch search)
+/// and footprint. Cheap to clone; `Send`, so a pipeline can prepare the next batch while
+/// the renderer renders this one.
+#[derive(Debug, Clone)]
+pub struct Preparer {
+    sensor: Sensor,
+    grid: HeightfieldGrid,
+}
+
+impl Preparer {
+    /// Prepares up to [`MAX_BATCH`] contacts for one submission.
+    pub fn prepare(&self, contacts: &[Contact]) -> Result<PreparedBatch> {
+        contacts
+            .iter()
+            .map(|c| prepare_contact(&self.sensor, &self.grid, &Press::from(c), 0))
+            .collect::<Result<Vec<_>>>()
+            .map(PreparedBatch)
+    }
+}
+
+/// Pose, footprint and frame uniform of one press (its noise seed as given).
+fn prepare_contact(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    press: &Press,
+    noise_seed: u32,
+) -> Result<Prepared> {
+    let pose = press.pose(sensor)?;
+    let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
+    let footprint = contact::footprint(sensor, grid, &pose, &press.object, reach);
+    let max_depth = pose.trace_depth_mm;
+    let uniform = FrameUniform::contact(&pose, &press.object, max_depth, footprint, noise_seed);
+    Ok(Prepared {
+        uniform,
+        press: press.clone(),
+        pose,
+        texel_rect: footprint.map(|f| f.texels),
+        pixel_rect: footprint.and_then(|f| f.pixels),
+        pressed_rect: footprint.map(|f| f.pressed),
+    })
+}
+
 /// Seconds spent in each phase of the last batch.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Timings {
@@ -93,6 +139,15 @@ pub struct Timings {
     pub readback: Duration,
     /// Pixels the camera and LED stages re-rendered (the touched lists' lengths), summed.
     pub touched_pixels: u64,
+}
+
+impl Timings {
+    fn add(&mut self, other: &Timings) {
+        self.prepare += other.prepare;
+        self.render += other.render;
+        self.readback += other.readback;
+        self.touched_pixels += other.touched_pixels;
+    }
 }
 
 /// A renderer for one sensor.
@@ -855,13 +910,15 @@ impl Renderer {
     }
 
     fn prepare(&mut self, press: &Press, noise_seed: u32) -> Result<Prepared> {
-        let sensor = &self.sensor;
-        let pose = press.pose(sensor)?;
-        let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
-        let footprint = contact::footprint(sensor, &self.grid, &pose, &press.object, reach);
-        let max_depth = pose.trace_depth_mm;
-        if let Object::Mesh { grid, .. } = press.object.as_ref() {
-            let key = Arc::as_ptr(&press.object) as usize;
+        let prepared = prepare_contact(&self.sensor, &self.grid, press, noise_seed)?;
+        self.upload_grid(&prepared.press.object);
+        Ok(prepared)
+    }
+
+    /// A mesh's baked SDF grid on the GPU, uploaded once per mesh.
+    fn upload_grid(&mut self, object: &Arc<Object>) {
+        if let Object::Mesh { grid, .. } = object.as_ref() {
+            let key = Arc::as_ptr(object) as usize;
             if !self.grids.contains_key(&key) {
                 // A bound on the cache: a long run may load many meshes.
                 if self.grids.len() >= MAX_CACHED_GRIDS {
@@ -875,18 +932,19 @@ impl Renderer {
                             contents: bytemuck::cast_slice(&grid.values),
                             usage: wgpu::BufferUsages::STORAGE,
                         });
-                self.grids.insert(key, (press.object.clone(), buffer));
+                self.grids.insert(key, (object.clone(), buffer));
             }
         }
-        let uniform = FrameUniform::contact(&pose, &press.object, max_depth, footprint, noise_seed);
-        Ok(Prepared {
-            uniform,
-            press: press.clone(),
-            pose,
-            texel_rect: footprint.map(|f| f.texels),
-            pixel_rect: footprint.and_then(|f| f.pixels),
-            pressed_rect: footprint.map(|f| f.pressed),
-        })
+    }
+
+    /// Prepares contacts off the renderer: a [`Preparer`] works on its own thread (the pose
+    /// and footprint searches are CPU work the GPU waits for) while the renderer renders the
+    /// batch before.
+    pub fn preparer(&self) -> Preparer {
+        Preparer {
+            sensor: self.sensor.clone(),
+            grid: self.grid,
+        }
     }
 
     /// A frame with no contact, as the camera would take it: the cached reference, with
@@ -937,32 +995,56 @@ impl Renderer {
     pub fn render_batch(&mut self, contacts: &[Contact]) -> Result<Vec<(Frame, GroundTruth)>> {
         let mut out = Vec::with_capacity(contacts.len());
         let mut total = Timings::default();
+        let preparer = self.preparer();
         for chunk in contacts.chunks(MAX_BATCH) {
             let start = Instant::now();
-            let mut prepared = Vec::with_capacity(chunk.len());
-            for c in chunk {
-                self.seed_counter = self.seed_counter.wrapping_add(1);
-                let seed = self.sensor.config.render.noise_seed
-                    ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
-                prepared.push(self.prepare(&Press::from(c), seed)?);
-            }
+            let batch = preparer.prepare(chunk)?;
             total.prepare += start.elapsed();
-            let Ran { frames, fields } = self.run(&prepared, &mut total)?;
-            let labelled = Instant::now();
-            // Only a contact's pixel rect is ever indented: its mask is counted there.
-            let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect).collect();
-            let truths = self.truths(prepared, fields);
-            for (((frame, over_pressed_texels), mut truth), rect) in
-                frames.into_iter().zip(truths).zip(pixel_rects)
-            {
-                let (count, bbox) = rect.map_or((0, None), |r| frame.mask_in(r));
-                truth.mask_pixels = count;
-                truth.mask_bbox = bbox;
-                truth.over_pressed = over_pressed_texels > 0;
-                out.push((frame, truth));
-            }
-            total.readback += labelled.elapsed();
+            out.extend(self.render_prepared(batch)?);
+            total.add(&self.timings);
         }
+        self.timings = total;
+        Ok(out)
+    }
+
+    /// Renders a batch a [`Preparer`] prepared (at most [`MAX_BATCH`] contacts, in one
+    /// submission). The sensor noise's seeds follow the renderer's own count, as in
+    /// [`Renderer::render_batch`].
+    pub fn render_prepared(&mut self, batch: PreparedBatch) -> Result<Vec<(Frame, GroundTruth)>> {
+        let mut prepared = batch.0;
+        if prepared.len() > MAX_BATCH {
+            return Err(GeltipError::input(
+                "batch",
+                format!(
+                    "{} contacts, at most {MAX_BATCH} a submission",
+                    prepared.len()
+                ),
+            ));
+        }
+        let mut total = Timings::default();
+        for p in &mut prepared {
+            self.seed_counter = self.seed_counter.wrapping_add(1);
+            p.uniform.noise_seed =
+                self.sensor.config.render.noise_seed ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
+            let object = p.press.object.clone();
+            self.upload_grid(&object);
+        }
+        let mut out = Vec::with_capacity(prepared.len());
+        let Ran { frames, fields } = self.run(&prepared, &mut total)?;
+        let labelled = Instant::now();
+        // Only a contact's pixel rect is ever indented: its mask is counted there.
+        let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect).collect();
+        let truths = self.truths(prepared, fields);
+        for (((frame, over_pressed_texels), mut truth), rect) in
+            frames.into_iter().zip(truths).zip(pixel_rects)
+        {
+            let (count, bbox) = rect.map_or((0, None), |r| frame.mask_in(r));
+            truth.mask_pixels = count;
+            truth.mask_bbox = bbox;
+            truth.over_pressed = over_pressed_texels > 0;
+            out.push((frame, truth));
+        }
+        total.readback += labelled.elapsed();
         self.timings = total;
         Ok(out)
     }
