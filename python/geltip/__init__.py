@@ -28,6 +28,7 @@ from ._geltip import (
     Sensor,
     Simulator,
     __version__,
+    keep_freed_memory,
     load_image,
     localise,
 )
@@ -59,6 +60,7 @@ __all__ = [
     "Sensor",
     "Simulator",
     "__version__",
+    "keep_freed_memory",
     "load_image",
     "localise",
     "region_names",

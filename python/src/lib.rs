@@ -1236,12 +1236,22 @@ fn load_image<'py>(
     array.reshape([h as usize, w as usize, 3])
 }
 
+/// Asks the C allocator to keep freed memory for reuse instead of returning it to the OS
+/// (glibc only; process-wide, so geltip never does it on import): each frame's fresh image
+/// buffers are then not page-faulted in again every frame (1.0-1.4 ms a 640x480 frame on a
+/// 2-core VM). True when it applied.
+#[pyfunction]
+fn keep_freed_memory() -> bool {
+    geltip::memory::keep_freed_memory()
+}
+
 #[pymodule]
 fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Sensor>()?;
     m.add_class::<Simulator>()?;
     m.add_function(wrap_pyfunction!(localise, m)?)?;
     m.add_function(wrap_pyfunction!(load_image, m)?)?;
+    m.add_function(wrap_pyfunction!(keep_freed_memory, m)?)?;
     m.add("MAX_BATCH", MAX_BATCH)?;
     m.add("REGION_NONE", REGION_NONE)?;
     m.add("REGION_HEMISPHERE", REGION_HEMISPHERE)?;

@@ -269,3 +269,19 @@ def test_mesh_object_matches_cli(sensor, cli, tmp_path):
     np.testing.assert_array_equal(images[0], image)
     with pytest.raises(ValueError, match=r"^objects\[0\]: expected a str or a path"):
         geltip.Simulator(sensor, objects=[3])
+
+
+def test_keep_freed_memory_applies_on_glibc():
+    """The allocator setting applies on glibc Linux (False elsewhere), in a fresh process
+    (it is process-wide), and rendering works after it."""
+    import platform
+    code = """
+        import geltip
+        kept = geltip.keep_freed_memory()
+        geltip.Simulator("paper").render(object="sphere", at="rotation=30", depth=1.0)
+        print(kept)
+    """
+    p = run_python(code)
+    assert p.returncode == 0, p.stderr
+    glibc = platform.system() == "Linux" and platform.libc_ver()[0] == "glibc"
+    assert p.stdout.strip() == str(glibc), p.stdout
