@@ -142,8 +142,9 @@ pub struct RenderConfig {
     pub heightfield_texels: u32,
     /// March steps of each camera ray through the elastomer shell (then bisection).
     pub ray_steps: u32,
-    /// Spacing of the elastomer kernels' taps, in standard deviations of the narrow blend
-    /// (`elastomer.blend_mm`); never closer than one heightfield texel.
+    /// Spacing of the elastomer kernels' taps, in standard deviations of each kernel's own
+    /// Gaussian (the narrow blend's is `elastomer.blend_mm`, the wide one's twice that);
+    /// never closer than one heightfield texel.
     pub blend_tap_spacing: f64,
     /// Standard deviation of additive sensor noise, in 8-bit grey levels (0 = none).
     pub noise: f64,

@@ -1,0 +1,39 @@
+//! `cargo bench --bench frames -- N`: renders N contact frames, one per submit (the paper's
+//! taps, every seventh in turn), and exits: a fixed workload for a profiler. The wall clock
+//! of a shared 2-core host varies 2x within the hour; instructions do not, so the README's
+//! per-frame instruction counts come from this under callgrind (the cost of N frames less
+//! that of 2, over N - 2, so start-up and the reference frame cancel out):
+//!
+//! ```text
+//! cargo bench --bench frames --no-run   # prints the binary's path
+//! valgrind --tool=callgrind --callgrind-out-file=/dev/null target/release/deps/frames-<hash> 2
+//! valgrind --tool=callgrind --callgrind-out-file=/dev/null target/release/deps/frames-<hash> 18
+//! ```
+//!
+//! (Run it once outside valgrind first, so Mesa's shader cache holds the pipelines, and set
+//! `GELTIP_GPU_TIMEOUT_S=900`: under valgrind a frame takes seconds.)
+
+use geltip::jobs::experiment;
+use geltip::object::Solid;
+use geltip::render::gpu::Renderer;
+use geltip::render::Contact;
+use geltip::sensor::Sensor;
+
+fn main() -> anyhow::Result<()> {
+    geltip::memory::keep_freed_memory();
+    // (cargo bench passes `--bench` too: the count is the argument that is a number.)
+    let n: usize = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(8);
+    let sensor = Sensor::preset("paper")?;
+    let mut renderer = Renderer::new(&sensor)?;
+    let taps: Vec<Contact> = Solid::ALL
+        .iter()
+        .flat_map(|&s| experiment::taps(s, &Default::default()))
+        .collect();
+    for k in 0..n {
+        renderer.render(&taps[(k * 7) % taps.len()])?;
+    }
+    Ok(())
+}
