@@ -90,10 +90,20 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
     elastomer_scratch[j * sensor.texels + i] = vec4<f32>(offset, 0.0);
 }
 
-// Outward normal of the deformed skin: the undeformed normal plus the interpolated offset.
-fn skin_normal(c: vec2<f32>) -> vec3<f32> {
-    let n0 = surface_normal(c);
-    let offset = sample_map_xyz(elastomer_map, texel_of(disc_of(c)));
+// The undeformed surface's outward normal on the radial line through p (from the sphere's
+// centre on the hemisphere, from the axis on the cylinder): surface_normal(coord_of(p))
+// without its trigonometry.
+fn normal_of_point(p: vec3<f32>) -> vec3<f32> {
+    if p.z > sensor.cylinder_length {
+        return normalize(p - vec3<f32>(0.0, 0.0, sensor.cylinder_length));
+    }
+    return vec3<f32>(normalize(p.xy), 0.0);
+}
+
+// Outward normal of the deformed skin over disc position u, whose undeformed normal is n0:
+// n0 plus the interpolated offset.
+fn skin_normal(n0: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let offset = sample_map_xyz(elastomer_map, texel_of(u));
     let n = n0 + offset;
     let len = length(n);
     if len == 0.0 {
@@ -136,10 +146,12 @@ fn cast_ray(px: vec2<f32>, probes: Probes) -> SkinHit {
     let h_in = height_at_disc(probes.a);
     let deepest = max(abs(h_in), max(abs(height_at_disc(probes.b)), abs(height_at_disc(probes.c))));
     if deepest < SHALLOW_MM {
-        let c = coord_of(t_hit * dir);
-        hit.indentation = height_at(c);
-        hit.point = t_hit * dir - hit.indentation * surface_normal(c);
-        hit.normal = skin_normal(c);
+        let surface = t_hit * dir;
+        let u = disc_of_point(surface);
+        let n0 = normal_of_point(surface);
+        hit.indentation = height_at_disc(u);
+        hit.point = surface - hit.indentation * n0;
+        hit.normal = skin_normal(n0, u);
         hit.ray = dir;
         hit.valid = true;
         return hit;
@@ -175,9 +187,9 @@ fn cast_ray(px: vec2<f32>, probes: Probes) -> SkinHit {
         t_hit = lo + (hi - lo) * clamp(g_lo / max(g_lo - g_hi, 1e-12), 0.0, 1.0);
     }
     hit.point = t_hit * dir;
-    let c = coord_of(hit.point);
-    hit.normal = skin_normal(c);
-    hit.indentation = height_at(c);
+    let u = disc_of_point(hit.point);
+    hit.normal = skin_normal(normal_of_point(hit.point), u);
+    hit.indentation = height_at_disc(u);
     hit.ray = dir;
     hit.valid = true;
     return hit;
@@ -202,7 +214,7 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let dir = ray.xyz;
     let point = capsule_hit(dir, 0.0) * dir;
-    write_pixel(i, shade(point, surface_normal(coord_of(point)), dir), 0.0);
+    write_pixel(i, shade(point, normal_of_point(point), dir), 0.0);
     let p = ray_probes(dir);
     probes[PROBES_STRIDE * i] = vec4<f32>(p.a, p.b);
     probes[PROBES_STRIDE * i + 1u] = vec4<f32>(p.c, p.t_in, p.t_out);
