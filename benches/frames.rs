@@ -14,9 +14,7 @@
 //! `GELTIP_GPU_TIMEOUT_S=900`: under valgrind a frame takes seconds.)
 
 use geltip::jobs::experiment;
-use geltip::object::Solid;
 use geltip::render::gpu::Renderer;
-use geltip::render::Contact;
 use geltip::sensor::Sensor;
 
 fn main() -> anyhow::Result<()> {
@@ -28,10 +26,7 @@ fn main() -> anyhow::Result<()> {
         .unwrap_or(8);
     let sensor = Sensor::preset("paper")?;
     let mut renderer = Renderer::new(&sensor)?;
-    let taps: Vec<Contact> = Solid::ALL
-        .iter()
-        .flat_map(|&s| experiment::taps(s, &Default::default()))
-        .collect();
+    let taps = experiment::all_taps(&Default::default());
     for k in 0..n {
         renderer.render(&taps[(k * 7) % taps.len()])?;
     }

@@ -34,10 +34,7 @@ fn main() -> anyhow::Result<()> {
     println!("geltip prepare benchmark: sensor paper, per contact (ms), rayon over the cores");
     println!("| contacts | n | pose ms | footprint ms |");
     println!("|---|---|---|---|");
-    let taps: Vec<Contact> = Solid::ALL
-        .iter()
-        .flat_map(|&s| experiment::taps(s, &Default::default()))
-        .collect();
+    let taps = experiment::all_taps(&Default::default());
     let (p, f) = time(&sensor, &taps)?;
     println!("| the paper's taps | {} | {p:.3} | {f:.3} |", taps.len());
     let depths = dataset::default_depth_range(sensor.finger.shell_thickness);

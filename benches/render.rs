@@ -11,7 +11,6 @@
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps.
 
 use geltip::jobs::experiment::{self, Protocol};
-use geltip::object::Solid;
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
 use geltip::render::{cpu, Contact, Press};
 use geltip::sensor::Sensor;
@@ -19,10 +18,7 @@ use std::time::{Duration, Instant};
 
 /// `n` contacts: the paper's 56 taps (seven solids at its eight positions), over and over.
 fn contacts(n: usize) -> Vec<Contact> {
-    let all: Vec<Contact> = Solid::ALL
-        .iter()
-        .flat_map(|&s| experiment::taps(s, &Protocol::default()))
-        .collect();
+    let all = experiment::all_taps(&Protocol::default());
     all.iter().cycle().take(n).cloned().collect()
 }
 

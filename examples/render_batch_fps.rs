@@ -13,7 +13,6 @@
 //! next (as `benches/render.rs` does), and prints the pass's frames per second.
 
 use geltip::jobs::experiment::{self, Protocol};
-use geltip::object::Solid;
 use geltip::render::gpu::{Renderer, MAX_BATCH};
 use geltip::render::Contact;
 use geltip::sensor::Sensor;
@@ -31,10 +30,7 @@ fn main() -> anyhow::Result<()> {
     };
     let sensor = Sensor::preset("paper")?;
     let mut renderer = Renderer::new(&sensor)?;
-    let taps: Vec<Contact> = Solid::ALL
-        .iter()
-        .flat_map(|&s| experiment::taps(s, &Protocol::default()))
-        .collect();
+    let taps = experiment::all_taps(&Protocol::default());
     let list: Vec<Contact> = taps.iter().cycle().take(frames.max(1)).cloned().collect();
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", geltip::gpu::host_description(renderer.adapter()))?;

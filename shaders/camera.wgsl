@@ -42,9 +42,13 @@ fn height_at_disc(u: vec2<f32>) -> f32 {
     return sample_map_x(height_map, texel_of(u));
 }
 
-// The largest displacement the probes see.
+// The largest displacement the probes see, given the displacement h_a at the first.
+fn probes_depth_from(h_a: f32, p: Probes) -> f32 {
+    return max(abs(h_a), max(abs(height_at_disc(p.b)), abs(height_at_disc(p.c))));
+}
+
 fn probes_depth(p: Probes) -> f32 {
-    return max(abs(height_at_disc(p.a)), max(abs(height_at_disc(p.b)), abs(height_at_disc(p.c))));
+    return probes_depth_from(height_at_disc(p.a), p);
 }
 
 // Mirror: src/render/camera.rs SHALLOW_MM.
@@ -91,7 +95,7 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 // The undeformed surface's outward normal on the radial line through p (from the sphere's
-// centre on the hemisphere, from the axis on the cylinder): surface_normal(coord_of(p))
+// centre on the hemisphere, from the axis on the cylinder): surface_normal at p's coordinates
 // without its trigonometry.
 fn normal_of_point(p: vec3<f32>) -> vec3<f32> {
     if p.z > sensor.cylinder_length {
@@ -144,7 +148,7 @@ fn cast_ray(px: vec2<f32>, probes: Probes) -> SkinHit {
     // Over barely moved skin the surface point pushed in along its normal is as good as the
     // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
     let h_in = height_at_disc(probes.a);
-    let deepest = max(abs(h_in), max(abs(height_at_disc(probes.b)), abs(height_at_disc(probes.c))));
+    let deepest = probes_depth_from(h_in, probes);
     if deepest < SHALLOW_MM {
         let surface = t_hit * dir;
         let u = disc_of_point(surface);

@@ -243,18 +243,9 @@ fn finger_signed_distance(p: vec3<f32>) -> f32 {
     return length(p.xy) - sensor.radius;
 }
 
-// (s, phi) of the surface point closest to p.
-fn coord_of(p: vec3<f32>) -> vec2<f32> {
-    let phi = atan2(p.y, p.x);
-    let lateral = length(p.xy);
-    if p.z > sensor.cylinder_length {
-        return vec2<f32>(sensor.radius * atan2(lateral, p.z - sensor.cylinder_length), phi);
-    }
-    return vec2<f32>(sensor.junction_s + (sensor.cylinder_length - p.z), phi);
-}
-
-// disc_of(coord_of(p)) without the azimuth's atan2, cos and sin: (cos phi, sin phi) is
-// p.xy / |p.xy| (on the axis the disc position is 0 above the junction; below it phi = 0).
+// The disc position of p's surface coordinates (Finger::coord_of) without the azimuth's
+// atan2, cos and sin: (cos phi, sin phi) is p.xy / |p.xy| (on the axis the disc position is
+// 0 above the junction; below it phi = 0).
 fn disc_of_point(p: vec3<f32>) -> vec2<f32> {
     let lateral = length(p.xy);
     var s: f32;

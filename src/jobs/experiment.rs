@@ -252,6 +252,11 @@ impl Report {
     }
 }
 
+/// All the paper's taps: the seven solids' eight each, solid by solid (56).
+pub fn all_taps(protocol: &Protocol) -> Vec<Contact> {
+    Solid::ALL.iter().flat_map(|&s| taps(s, protocol)).collect()
+}
+
 /// The paper's eight taps of `object`, as [`run`] renders them.
 pub fn taps(object: Solid, protocol: &Protocol) -> Vec<Contact> {
     POSITIONS

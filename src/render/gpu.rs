@@ -98,12 +98,21 @@ pub struct Preparer {
 impl Preparer {
     /// Prepares up to [`MAX_BATCH`] contacts for one submission.
     pub fn prepare(&self, contacts: &[Contact]) -> Result<PreparedBatch> {
-        contacts
-            .iter()
-            .map(|c| prepare_contact(&self.sensor, &self.grid, &Press::from(c), 0))
-            .collect::<Result<Vec<_>>>()
-            .map(PreparedBatch)
+        prepare_batch(&self.sensor, &self.grid, contacts)
     }
+}
+
+/// Poses, footprints and uniforms of `contacts` (noise seeds are set when rendered).
+fn prepare_batch(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    contacts: &[Contact],
+) -> Result<PreparedBatch> {
+    contacts
+        .iter()
+        .map(|c| prepare_contact(sensor, grid, &Press::from(c), 0))
+        .collect::<Result<Vec<_>>>()
+        .map(PreparedBatch)
 }
 
 /// Pose, footprint and frame uniform of one press (its noise seed as given).
@@ -995,10 +1004,9 @@ impl Renderer {
     pub fn render_batch(&mut self, contacts: &[Contact]) -> Result<Vec<(Frame, GroundTruth)>> {
         let mut out = Vec::with_capacity(contacts.len());
         let mut total = Timings::default();
-        let preparer = self.preparer();
         for chunk in contacts.chunks(MAX_BATCH) {
             let start = Instant::now();
-            let batch = preparer.prepare(chunk)?;
+            let batch = prepare_batch(&self.sensor, &self.grid, chunk)?;
             total.prepare += start.elapsed();
             out.extend(self.render_prepared(batch)?);
             total.add(&self.timings);
