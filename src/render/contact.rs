@@ -490,17 +490,11 @@ fn touching_offset(
 /// [`FIRST_TOUCH_TOLERANCE_MM`] (or 2000 iterations: a bound, the caller refines further).
 /// The best point and its score.
 fn nelder_mead(score: impl Fn(DVec2) -> f64, start: (DVec2, f64), size: f64) -> (DVec2, f64) {
-    let v0 = start.0;
+    let vertex = |v: DVec2| (v, score(v));
     let mut simplex = [
         start,
-        (
-            v0 + DVec2::new(size, 0.0),
-            score(v0 + DVec2::new(size, 0.0)),
-        ),
-        (
-            v0 + DVec2::new(0.0, size),
-            score(v0 + DVec2::new(0.0, size)),
-        ),
+        vertex(start.0 + DVec2::new(size, 0.0)),
+        vertex(start.0 + DVec2::new(0.0, size)),
     ];
     for _ in 0..2000 {
         simplex.sort_by(|a, b| b.1.total_cmp(&a.1));
@@ -512,28 +506,28 @@ fn nelder_mead(score: impl Fn(DVec2) -> f64, start: (DVec2, f64), size: f64) -> 
         }
         let centroid = 0.5 * (simplex[0].0 + simplex[1].0);
         let worst = simplex[2];
-        let r = centroid + (centroid - worst.0);
-        let fr = score(r);
-        if fr > simplex[0].1 {
-            let e = centroid + 2.0 * (centroid - worst.0);
-            let fe = score(e);
-            simplex[2] = if fe > fr { (e, fe) } else { (r, fr) };
-        } else if fr > simplex[1].1 {
-            simplex[2] = (r, fr);
+        let reflected = vertex(centroid + (centroid - worst.0));
+        if reflected.1 > simplex[0].1 {
+            let expanded = vertex(centroid + 2.0 * (centroid - worst.0));
+            simplex[2] = if expanded.1 > reflected.1 {
+                expanded
+            } else {
+                reflected
+            };
+        } else if reflected.1 > simplex[1].1 {
+            simplex[2] = reflected;
         } else {
-            let c = if fr > worst.1 {
-                centroid + 0.5 * (r - centroid)
+            let contracted = vertex(if reflected.1 > worst.1 {
+                centroid + 0.5 * (reflected.0 - centroid)
             } else {
                 centroid + 0.5 * (worst.0 - centroid)
-            };
-            let fc = score(c);
-            if fc > worst.1.max(fr) {
-                simplex[2] = (c, fc);
+            });
+            if contracted.1 > worst.1.max(reflected.1) {
+                simplex[2] = contracted;
             } else {
-                let b0 = simplex[0].0;
+                let best = simplex[0].0;
                 for v in simplex.iter_mut().skip(1) {
-                    let p = b0 + 0.5 * (v.0 - b0);
-                    *v = (p, score(p));
+                    *v = vertex(best + 0.5 * (v.0 - best));
                 }
             }
         }
