@@ -228,11 +228,18 @@ fn main() -> anyhow::Result<()> {
         &mut cpu_passes,
     );
 
-    // Where a contact frame's time goes: each stage submitted and waited for on its own,
-    // averaged over eight of the paper's taps (every solid, every position).
+    // Where a contact frame's time goes, averaged over eight of the paper's taps (every
+    // solid, every position): from timestamps between the stages of one submission where
+    // the device writes them (lavapipe does), else each stage submitted and waited for on
+    // its own (then a stage's time includes a submission and a wait).
     println!();
-    println!("| {:<28} | {:>8} |", "stage (one contact)", "ms");
-    println!("|{:-<30}|{:->10}|", "", "");
+    let how = if geltip::gpu::GpuContext::shared()?.has_timestamps() {
+        "ms, timestamps"
+    } else {
+        "ms, own submit"
+    };
+    println!("| {:<28} | {:>14} |", "stage (one contact)", how);
+    println!("|{:-<30}|{:->16}|", "", "");
     let mut totals: Vec<(&str, f64)> = Vec::new();
     // Every seventh of the paper's taps: each solid and each position once.
     let sample: Vec<&Contact> = list.iter().step_by(7).take(8).collect();
@@ -245,7 +252,7 @@ fn main() -> anyhow::Result<()> {
         }
     }
     for (name, ms) in totals {
-        println!("| {name:<28} | {ms:>8.2} |");
+        println!("| {name:<28} | {ms:>14.3} |");
     }
     Ok(())
 }

@@ -543,6 +543,38 @@ fn a_frame_does_not_depend_on_the_frames_before_it() {
 }
 
 #[test]
+fn profiling_a_frame_times_every_stage_and_leaves_the_renderer_as_rendering_does() {
+    // The profiler records the same stages as a frame (in one submission with timestamps
+    // where the device has them): every stage named once, the GPU's share positive, and the
+    // next frame exactly as from a fresh renderer (the profiled contact's texels are cleared).
+    let small = contact(Solid::Cone, Place::Rotation(62.0), 0.3);
+    let mut r = paper();
+    let mut fresh = Renderer::new(r.sensor()).unwrap();
+    let (alone, _) = fresh.render(&small).unwrap();
+    let stages = r
+        .profile_stages(&contact(Solid::Slab, Place::Rotation(60.0), 1.5))
+        .unwrap();
+    let names: Vec<&str> = stages.iter().map(|s| s.0).collect();
+    assert_eq!(
+        names,
+        [
+            "copy reference + clear",
+            "contact",
+            "elastomer: meridians",
+            "elastomer: parallels",
+            "elastomer: skin normals",
+            "camera: select touched",
+            "camera + leds: touched pixels",
+            "readback"
+        ]
+    );
+    let gpu: std::time::Duration = stages[..7].iter().map(|s| s.1).sum();
+    assert!(gpu > std::time::Duration::ZERO, "{stages:?}");
+    let (after, _) = r.render(&small).unwrap();
+    assert_eq!(alone.rgba, after.rgba);
+}
+
+#[test]
 fn noise_is_seeded() {
     let mut c = common::paper_config();
     c.render.noise = 2.0;

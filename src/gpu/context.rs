@@ -24,6 +24,11 @@ const INSTALL_HINT: &str = "install a Vulkan driver; for headless software rende
 lavapipe (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers`) and check that \
 /usr/share/vulkan/icd.d/lvp_icd*.json exists";
 
+/// The features [`GpuContext::has_timestamps`] asks for: timestamps written between a command
+/// encoder's commands.
+const TIMESTAMPS: wgpu::Features =
+    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+
 /// A wgpu device and queue for headless compute, with the adapter they came from.
 ///
 /// Create one per process with [`GpuContext::shared`]; [`GpuContext::new`] makes a fresh one.
@@ -88,9 +93,12 @@ impl GpuContext {
         );
 
         let required_limits = compute_limits(&adapter.limits());
+        // Optional: timestamps between commands, for the stage profiler only (rendering never
+        // needs them; adapters without them profile stage by stage instead).
+        let required_features = adapter.features() & TIMESTAMPS;
         let desc = wgpu::DeviceDescriptor {
             label: Some("geltip"),
-            required_features: wgpu::Features::empty(),
+            required_features,
             required_limits,
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -140,6 +148,12 @@ impl GpuContext {
             Ok(ctx) => Ok(ctx),
             Err(e) => Err(e.to_error()),
         }
+    }
+
+    /// Whether the device writes timestamps between an encoder's commands (requested when
+    /// the adapter offers them; lavapipe does).
+    pub fn has_timestamps(&self) -> bool {
+        self.device.features().contains(TIMESTAMPS)
     }
 
     /// How long [`GpuContext::wait`] waits for a submission.

@@ -1262,8 +1262,13 @@ impl Renderer {
         Ok((frames, out_fields))
     }
 
-    /// Renders one contact stage by stage, waiting after each, and returns each stage's wall
-    /// time (for the benchmark's breakdown; slower than [`Renderer::render`]).
+    /// Renders one contact and returns each stage's time (for the benchmark's breakdown;
+    /// slower than [`Renderer::render`]). Where the device writes timestamps between
+    /// commands (lavapipe does), the frame is recorded and submitted once, as
+    /// [`Renderer::render`] does, with a timestamp after each stage: a stage's time is then
+    /// its own work, not a submission's and a wait's. Elsewhere each stage is submitted and
+    /// waited for on its own, and its wall time includes both. The readback is timed on the
+    /// CPU either way.
     pub fn profile_stages(&mut self, contact: &Contact) -> Result<Vec<(&'static str, Duration)>> {
         let p = self.prepare(&Press::from(contact), 0)?;
         let uniform = self.uniform_buffer(&p.uniform);
@@ -1278,7 +1283,6 @@ impl Renderer {
             Texels(&'a wgpu::ComputePipeline, Map),
             Select,
             Touched(&'a wgpu::ComputePipeline),
-            Readback,
         }
         let mut stages = vec![("copy reference + clear", Step::Clear)];
         for (name, pipeline, map) in self.heightfield_stages() {
@@ -1290,50 +1294,77 @@ impl Renderer {
                 "camera + leds: touched pixels",
                 Step::Touched(&pipelines.camera_touched),
             ),
-            ("readback", Step::Readback),
         ]);
-        let mut out = Vec::new();
-        for (name, step) in stages {
-            let start = Instant::now();
-            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-            match step {
-                Step::Readback => {
-                    self.read_frames(&[self.changed_rows(p.pixel_rect)], &[])?;
-                    out.push((name, start.elapsed()));
-                    continue;
+        let record = |encoder: &mut wgpu::CommandEncoder, step: &Step| match *step {
+            Step::Clear => {
+                self.record_frame_start(encoder, 0, p.pixel_rect);
+                if let Some(region) = region {
+                    self.clear_heightfield(encoder, Some(region));
                 }
-                Step::Clear => {
-                    self.record_frame_start(&mut encoder, 0, p.pixel_rect);
-                    if let Some(region) = region {
-                        self.clear_heightfield(&mut encoder, Some(region));
-                    }
-                }
-                Step::Texels(pipeline, map) => {
-                    if let (Some(t), Some(pressed), Some(region)) =
-                        (p.texel_rect, p.pressed_rect, region)
-                    {
-                        let contact = matches!(map, Map::Penetration);
-                        let rect = if contact { pressed } else { t };
-                        self.record_texels(&mut encoder, &bind, pipeline, map, rect, region);
-                        if contact {
-                            self.copy_field(&mut encoder, pressed, 0);
-                        }
-                    }
-                }
-                Step::Select => {
-                    if let Some(r) = p.pixel_rect {
-                        self.record_select(&mut encoder, &bind, 0, r);
-                    }
-                }
-                Step::Touched(pipeline) => {
-                    if p.pixel_rect.is_some() {
-                        self.dispatch_indirect(&mut encoder, pipeline, &bind, 0);
+            }
+            Step::Texels(pipeline, map) => {
+                if let (Some(t), Some(pressed), Some(region)) =
+                    (p.texel_rect, p.pressed_rect, region)
+                {
+                    let contact = matches!(map, Map::Penetration);
+                    let rect = if contact { pressed } else { t };
+                    self.record_texels(encoder, &bind, pipeline, map, rect, region);
+                    if contact {
+                        self.copy_field(encoder, pressed, 0);
                     }
                 }
             }
-            self.ctx.submit_and_wait(name, encoder)?;
-            out.push((name, start.elapsed()));
+            Step::Select => {
+                if let Some(r) = p.pixel_rect {
+                    self.record_select(encoder, &bind, 0, r);
+                }
+            }
+            Step::Touched(pipeline) => {
+                if p.pixel_rect.is_some() {
+                    self.dispatch_indirect(encoder, pipeline, &bind, 0);
+                }
+            }
+        };
+        let mut out = Vec::new();
+        if self.ctx.has_timestamps() {
+            let marks = stages.len() as u32 + 1;
+            let queries = self.ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("geltip stage timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: marks,
+            });
+            let resolved = storage(
+                self.ctx,
+                "geltip stage timestamps",
+                marks as u64 * 8,
+                wgpu::BufferUsages::QUERY_RESOLVE,
+            );
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            encoder.write_timestamp(&queries, 0);
+            for (k, (_, step)) in stages.iter().enumerate() {
+                record(&mut encoder, step);
+                encoder.write_timestamp(&queries, k as u32 + 1);
+            }
+            encoder.resolve_query_set(&queries, 0..marks, &resolved, 0);
+            self.ctx.submit_and_wait("profiling a frame", encoder)?;
+            let ticks: Vec<u64> = read_buffer(self.ctx, &resolved, 0, marks as usize)?;
+            let ns = self.ctx.queue.get_timestamp_period() as f64;
+            for (k, (name, _)) in stages.iter().enumerate() {
+                let elapsed = ticks[k + 1].saturating_sub(ticks[k]) as f64 * ns;
+                out.push((*name, Duration::from_nanos(elapsed as u64)));
+            }
+        } else {
+            for (name, step) in &stages {
+                let start = Instant::now();
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                record(&mut encoder, step);
+                self.ctx.submit_and_wait(name, encoder)?;
+                out.push((*name, start.elapsed()));
+            }
         }
+        let start = Instant::now();
+        self.read_frames(&[self.changed_rows(p.pixel_rect)], &[])?;
+        out.push(("readback", start.elapsed()));
         if let (Some(t), Some(r)) = (p.texel_rect, p.pixel_rect) {
             log::info!("texel rect {}x{}, pixel rect {}x{}", t.w, t.h, r.w, r.h);
         }
