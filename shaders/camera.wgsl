@@ -42,25 +42,17 @@ fn height_at_disc(u: vec2<f32>) -> f32 {
     return sample_map_x(height_map, texel_of(u));
 }
 
-// The largest displacement the probes see, given the displacement h_a at the first.
-fn probes_depth_from(h_a: f32, p: Probes) -> f32 {
-    return max(abs(h_a), max(abs(height_at_disc(p.b)), abs(height_at_disc(p.c))));
-}
-
+// The largest displacement the probes see.
 fn probes_depth(p: Probes) -> f32 {
-    return probes_depth_from(height_at_disc(p.a), p);
+    return max(abs(height_at_disc(p.a)), max(abs(height_at_disc(p.b)), abs(height_at_disc(p.c))));
 }
 
 // Mirror: src/render/camera.rs SHALLOW_MM.
 const SHALLOW_MM: f32 = 0.02;
 
-fn height_at(c: vec2<f32>) -> f32 {
-    return height_at_disc(disc_of(c));
-}
-
 fn skin_at(u: vec2<f32>) -> vec3<f32> {
-    let c = coord_of_disc(u);
-    return surface_point(c) - height_at(c) * surface_normal(c);
+    let at = surface_at_disc(u);
+    return at.point - height_at_disc(u) * at.normal;
 }
 
 // Per texel of the contact's rect: the deformed skin's normal minus the undeformed one, by
@@ -75,10 +67,9 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = frame.texel_rect.x + id.x;
     let j = frame.texel_rect.y + id.y;
     let u = texel_centre(i, j);
-    let c = coord_of_disc(u);
     var offset = vec3<f32>(0.0);
-    if c.x <= sensor.half_size_mm {
-        let n0 = surface_normal(c);
+    if length(u) <= sensor.half_size_mm {
+        let n0 = surface_at_disc(u).normal;
         let ex = vec2<f32>(sensor.texel_mm, 0.0);
         let ey = vec2<f32>(0.0, sensor.texel_mm);
         var n = cross(skin_at(u + ex) - skin_at(u - ex), skin_at(u + ey) - skin_at(u - ey));
@@ -95,7 +86,7 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 // The undeformed surface's outward normal on the radial line through p (from the sphere's
-// centre on the hemisphere, from the axis on the cylinder): surface_normal at p's coordinates
+// centre on the hemisphere, from the axis on the cylinder): the normal at p's coordinates
 // without its trigonometry.
 fn normal_of_point(p: vec3<f32>) -> vec3<f32> {
     if p.z > sensor.cylinder_length {
@@ -130,43 +121,42 @@ struct SkinHit {
     valid: bool,
 }
 
-// The skin a listed pixel sees, from its probes as the reference frame left them (no lens
-// or shell geometry recomputed but the ray itself).
-fn cast_ray(px: vec2<f32>, probes: Probes) -> SkinHit {
+// The skin a shallow pixel sees (its probes saw skin moved less than SHALLOW_MM): the surface
+// point its ray meets, pushed in along the normal by the skin's displacement there. Most
+// touched rays cross barely moved skin, where this is as good as the march (the true crossing
+// is within depth x tan(incidence), a fraction of a pixel).
+fn skin_over_surface(px: vec2<f32>) -> SkinHit {
     var hit: SkinHit;
-    hit.valid = false;
     let ray = pixel_ray(px);
-    if ray.w == 0.0 || probes.t_in == 0.0 {
-        return hit;
-    }
+    hit.valid = ray.w != 0.0;
+    let dir = ray.xyz;
+    let surface = capsule_hit(dir, 0.0) * dir;
+    let u = disc_of_point(surface);
+    let n0 = normal_of_point(surface);
+    hit.indentation = height_at_disc(u);
+    hit.point = surface - hit.indentation * n0;
+    hit.normal = skin_normal(n0, u);
+    hit.ray = dir;
+    return hit;
+}
+
+// The skin a deep pixel sees, marched from its probes as the reference frame left them (no
+// lens or shell geometry recomputed but the ray itself).
+fn march_to_skin(px: vec2<f32>, probes: Probes) -> SkinHit {
+    var hit: SkinHit;
+    let ray = pixel_ray(px);
+    hit.valid = ray.w != 0.0 && probes.t_in != 0.0;
     let dir = ray.xyz;
     let t_in = probes.t_in;
     let t_out = probes.t_out;
     var t_hit = capsule_hit(dir, 0.0);
-    // Most rays cross untouched skin: then the skin is the surface itself, exactly, with no
-    // march (the reference frame is all such rays, so a frame's untouched pixels match it).
-    // Over barely moved skin the surface point pushed in along its normal is as good as the
-    // march (the true crossing is within depth x tan(incidence), a fraction of a pixel).
-    let h_in = height_at_disc(probes.a);
-    let deepest = probes_depth_from(h_in, probes);
-    if deepest < SHALLOW_MM {
-        let surface = t_hit * dir;
-        let u = disc_of_point(surface);
-        let n0 = normal_of_point(surface);
-        hit.indentation = height_at_disc(u);
-        hit.point = surface - hit.indentation * n0;
-        hit.normal = skin_normal(n0, u);
-        hit.ray = dir;
-        hit.valid = true;
-        return hit;
-    }
     // Bracket first, refine after: on a SIMD device (llvmpipe runs 8 pixels per lane group
     // and executes both sides of every branch) a refinement inside the stepping loop would
     // cost every pixel the bisection at every step. The gaps at the bracket's ends come from
     // the march (at t_in the ray is on the shell's inner face, T deep: probe a).
     var lo = t_in;
     var hi = t_in;
-    var g_lo = sensor.shell_thickness - h_in;
+    var g_lo = sensor.shell_thickness - height_at_disc(probes.a);
     var g_hi = g_lo;
     var found = false;
     for (var k = 1u; k <= RAY_STEPS; k++) {
@@ -195,7 +185,6 @@ fn cast_ray(px: vec2<f32>, probes: Probes) -> SkinHit {
     hit.normal = skin_normal(normal_of_point(hit.point), u);
     hit.indentation = height_at_disc(u);
     hit.ray = dir;
-    hit.valid = true;
     return hit;
 }
 
@@ -226,9 +215,12 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // A contact frame, first pass over its pixel rect: the pixels whose ray's stretch of shell
 // sees any deformation (by the probe positions the reference frame left) go on the touched
-// list; the rest keep the reference's colour. Only listed pixels are cast and shaded, in
-// dispatches sized on the GPU (`TOUCHED_DISPATCH`), so no pixel pays for its neighbours'
-// marches: llvmpipe runs 8 pixels per SIMD group and executes both sides of every branch.
+// list, the shallow ones (SHALLOW_MM) from its front and the deep ones from its back; the
+// rest keep the reference's colour. Each kind is cast and shaded by its own pass, in
+// dispatches sized on the GPU (SHALLOW_DISPATCH, DEEP_DISPATCH). Why two passes: llvmpipe
+// runs 8 pixels per SIMD group and executes both sides of every branch, so one pass would
+// cost every pixel the march and the shallow path both; and no pixel off the list pays for
+// its neighbours' marches.
 @compute @workgroup_size(8, 8)
 fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
@@ -238,39 +230,81 @@ fn select_touched(@builtin(global_invocation_id) id: vec3<u32>) {
     let y = frame.pixel_rect.y + id.y;
     let pixel = y * sensor.image_size.x + x;
     let p = load_probes(x, y);
-    if p.t_in == 0.0 || probes_depth(p) == 0.0 {
+    if p.t_in == 0.0 {
         return;
     }
-    let k = atomicAdd(&counters[TOUCHED_COUNT], 1u);
-    // The first pixel of each workgroup's share sizes the dispatch: G groups in all, as
-    // min(G, TOUCHED_MAX_GROUPS) x ceil(G / TOUCHED_MAX_GROUPS) x 1.
-    if k % TOUCHED_WORKGROUP == 0u {
-        let g = k / TOUCHED_WORKGROUP;
-        atomicMax(&counters[TOUCHED_DISPATCH], min(g + 1u, TOUCHED_MAX_GROUPS));
-        atomicMax(&counters[TOUCHED_DISPATCH + 1u], g / TOUCHED_MAX_GROUPS + 1u);
-        atomicStore(&counters[TOUCHED_DISPATCH + 2u], 1u);
+    let deepest = probes_depth(p);
+    if deepest == 0.0 {
+        return;
     }
-    atomicStore(&counters[TOUCHED_LIST + k], pixel);
+    // One atomic path for both kinds (selects, not branches: see above).
+    let deep = deepest >= SHALLOW_MM;
+    let k = list_touched(select(SHALLOW_COUNT, DEEP_COUNT, deep), select(SHALLOW_DISPATCH, DEEP_DISPATCH, deep));
+    atomicStore(&counters[listed_at(k, deep)], pixel);
 }
 
-// A contact frame, second pass: one invocation per touched pixel, cast and shaded at once
-// (the LED stage's shading, shaders/shared/shading.wgsl): the hit goes straight into the
-// pixel.
-@compute @workgroup_size(64)
-fn camera_touched(@builtin(global_invocation_id) id: vec3<u32>) {
-    let k = touched_index(id);
-    if k >= atomicLoad(&counters[TOUCHED_COUNT]) {
-        return;
+// Where place k of the touched list's shallow (front) or deep (back) part is.
+fn listed_at(k: u32, deep: bool) -> u32 {
+    return select(TOUCHED_LIST + k, TOUCHED_LIST + list_capacity() - 1u - k, deep);
+}
+
+// Pixels the touched list holds: a frame's.
+fn list_capacity() -> u32 {
+    return sensor.image_size.x * sensor.image_size.y;
+}
+
+// Takes the next place of a kind of touched pixel (its count at word `count`) and keeps the
+// dispatch over that kind (at word `dispatch`) large enough: the first pixel of each
+// workgroup's share sizes it, G groups in all as min(G, TOUCHED_MAX_GROUPS) x
+// ceil(G / TOUCHED_MAX_GROUPS) x 1.
+fn list_touched(count: u32, dispatch: u32) -> u32 {
+    let k = atomicAdd(&counters[count], 1u);
+    if k % TOUCHED_WORKGROUP == 0u {
+        let g = k / TOUCHED_WORKGROUP;
+        atomicMax(&counters[dispatch], min(g + 1u, TOUCHED_MAX_GROUPS));
+        atomicMax(&counters[dispatch + 1u], g / TOUCHED_MAX_GROUPS + 1u);
+        atomicStore(&counters[dispatch + 2u], 1u);
     }
-    let pixel = atomicLoad(&counters[TOUCHED_LIST + k]);
-    let x = pixel % sensor.image_size.x;
-    let y = pixel / sensor.image_size.x;
-    let hit = cast_ray(vec2<f32>(f32(x), f32(y)), load_probes(x, y));
+    return k;
+}
+
+// The pixel at place k of the touched list's shallow (front) or deep (back) part.
+fn listed_pixel(k: u32, deep: bool) -> vec2<u32> {
+    let pixel = atomicLoad(&counters[listed_at(k, deep)]);
+    return vec2<u32>(pixel % sensor.image_size.x, pixel / sensor.image_size.x);
+}
+
+fn write_hit(xy: vec2<u32>, hit: SkinHit) {
+    let pixel = xy.y * sensor.image_size.x + xy.x;
     if !hit.valid {
         write_pixel(pixel, vec3<f32>(0.0), 0.0);
         return;
     }
     write_pixel(pixel, shade(hit.point, hit.normal, hit.ray), hit.indentation);
+}
+
+// A contact frame, second pass: one invocation per shallow pixel, cast and shaded at once
+// (the LED stage's shading, shaders/shared/shading.wgsl): the hit goes straight into the
+// pixel.
+@compute @workgroup_size(64)
+fn camera_shallow(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = touched_index(id);
+    if k >= atomicLoad(&counters[SHALLOW_COUNT]) {
+        return;
+    }
+    let xy = listed_pixel(k, false);
+    write_hit(xy, skin_over_surface(vec2<f32>(xy)));
+}
+
+// The same for the deep pixels: marched.
+@compute @workgroup_size(64)
+fn camera_deep(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = touched_index(id);
+    if k >= atomicLoad(&counters[DEEP_COUNT]) {
+        return;
+    }
+    let xy = listed_pixel(k, true);
+    write_hit(xy, march_to_skin(vec2<f32>(xy), load_probes(xy.x, xy.y)));
 }
 
 // For tests: the undeformed surface point each listed pixel sees. Input:

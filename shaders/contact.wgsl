@@ -35,11 +35,17 @@ fn grid_sdf(p: vec3<f32>) -> f32 {
     return v;
 }
 
+// The frame's object (FrameUniform object_kind) as a pipeline constant: the renderer builds
+// one contact pipeline per kind it meets (src/render/gpu.rs). Why: llvmpipe runs both sides
+// of every branch, so with the kind read from the uniform every trace step evaluated every
+// solid and the baked grid's eight loads; with a constant the driver folds the rest away.
+override OBJECT_KIND: u32 = 0u;
+
 fn object_sdf(p: vec3<f32>) -> f32 {
-    if frame.object_kind == GRID_OBJECT {
+    if OBJECT_KIND == GRID_OBJECT {
         return grid_sdf(p);
     }
-    return solid_sdf(frame.object_kind, p);
+    return solid_sdf(OBJECT_KIND, p);
 }
 
 // Object-local coordinates of a camera-frame point.
@@ -52,9 +58,10 @@ fn to_object(p: vec3<f32>) -> vec3<f32> {
 // S - lambda n inside the object grown by drape_mm, less drape_mm (the skin drapes from an
 // edge on a circle instead of a cliff). Sphere tracing from the deep end outwards meets the
 // deepest object point first. Mirror: src/render/contact.rs penetration.
-fn penetration_at(c: vec2<f32>) -> f32 {
-    let s = surface_point(c);
-    let n = surface_normal(c);
+fn penetration_at(u: vec2<f32>) -> f32 {
+    let at = surface_at_disc(u);
+    let s = at.point;
+    let n = at.normal;
     let drape = sensor.drape_mm;
     var lambda = frame.origin.w + drape;
     for (var i = 0u; i < MAX_TRACE_STEPS; i++) {
@@ -78,10 +85,10 @@ fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = frame.pressed_rect.x + id.x;
     let j = frame.pressed_rect.y + id.y;
     // One sample per texel is enough: the drape makes the skin continuous at object edges.
-    let c = coord_of_disc(texel_centre(i, j));
+    let u = texel_centre(i, j);
     var p = 0.0;
-    if c.x <= sensor.half_size_mm {
-        p = penetration_at(c);
+    if length(u) <= sensor.half_size_mm {
+        p = penetration_at(u);
     }
     // Several objects in one frame: each contact pass keeps the deepest press (the frame
     // clears the heightfield first, so one object writes its own penetration).

@@ -37,10 +37,16 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     elastomer_scratch[j * sensor.texels + i] = vec4<f32>(narrow, wide, 0.0, 0.0);
 }
 
-// Walks the parallel through disc position (radius s, azimuth phi) by rotating the disc
-// position one tap at a time (one sine and cosine per texel instead of per tap).
-fn parallel_start(c: vec2<f32>, rho: f32, step: f32, taps: i32) -> vec2<f32> {
-    return disc_of(vec2<f32>(c.x, c.y - f32(taps) * step / rho));
+// Walks the parallel through disc position u one tap at a time, rotating it by the tap's
+// turn (cos, sin of step / rho): the first tap is `taps` turns back (no sine or cosine of the
+// azimuth at all).
+fn parallel_start(u: vec2<f32>, turn: vec2<f32>, taps: i32) -> vec2<f32> {
+    let back = vec2<f32>(turn.x, -turn.y);
+    var p = u;
+    for (var k = 0; k < taps; k++) {
+        p = rotate(p, back);
+    }
+    return p;
 }
 
 fn rotate(u: vec2<f32>, turn: vec2<f32>) -> vec2<f32> {
@@ -55,13 +61,13 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = frame.texel_rect.x + id.x;
     let j = frame.texel_rect.y + id.y;
     let idx = j * sensor.texels + i;
-    let c = coord_of_disc(texel_centre(i, j));
-    let rho = parallel_radius(c.x);
+    let here = texel_centre(i, j);
+    let rho = parallel_radius(length(here));
     var v = elastomer_scratch[idx].xy;
     if rho > 1e-6 {
         let n_step = sensor.narrow_step_mm;
         let n_turn = vec2<f32>(cos(n_step / rho), sin(n_step / rho));
-        var u = parallel_start(c, rho, n_step, NARROW_TAPS);
+        var u = parallel_start(here, n_turn, NARROW_TAPS);
         var narrow = 0.0;
         for (var k = -NARROW_TAPS; k <= NARROW_TAPS; k++) {
             narrow += sensor.blend_weights[abs(k)].x * sample_map_x(elastomer_map, texel_of(u));
@@ -69,7 +75,7 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let w_step = sensor.wide_step_mm;
         let w_turn = vec2<f32>(cos(w_step / rho), sin(w_step / rho));
-        u = parallel_start(c, rho, w_step, WIDE_TAPS);
+        u = parallel_start(here, w_turn, WIDE_TAPS);
         var wide = 0.0;
         for (var k = -WIDE_TAPS; k <= WIDE_TAPS; k++) {
             wide += sensor.blend_weights[abs(k)].y * sample_map_y(elastomer_map, texel_of(u));

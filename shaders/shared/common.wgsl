@@ -132,11 +132,15 @@ const PROBES_STRIDE: u32 = 2u;
 
 // Texels pressed beyond the shell.
 const OVER_PRESSED: u32 = 0u;
-// Pixels on the touched list (camera.wgsl select_touched).
-const TOUCHED_COUNT: u32 = 1u;
-// Three words: the workgroups of the passes over the touched list, as an indirect dispatch.
-const TOUCHED_DISPATCH: u32 = 2u;
-// The touched pixels' indices (y * width + x) start here.
+// Touched pixels (camera.wgsl select_touched) by what their rays' probes see: skin moved less
+// than SHALLOW_MM (listed from the list's front), or more (from its back).
+const SHALLOW_COUNT: u32 = 1u;
+const DEEP_COUNT: u32 = 2u;
+// Three words each (at a 16-byte stride): the workgroups of the passes over the shallow and
+// the deep pixels, as indirect dispatches.
+const SHALLOW_DISPATCH: u32 = 4u;
+const DEEP_DISPATCH: u32 = 8u;
+// The touched pixels' indices (y * width + x) start here; the list holds a frame's pixels.
 const TOUCHED_LIST: u32 = 64u;
 // Invocations per workgroup of the passes over the touched list.
 const TOUCHED_WORKGROUP: u32 = 64u;
@@ -260,27 +264,28 @@ fn disc_of_point(p: vec3<f32>) -> vec2<f32> {
     return s * p.xy / lateral;
 }
 
-// Surface point at coordinates (s, phi).
-fn surface_point(c: vec2<f32>) -> vec3<f32> {
-    let cs = cos(c.y);
-    let sn = sin(c.y);
-    if c.x <= sensor.junction_s {
-        let beta = c.x / sensor.radius;
-        let r = sensor.radius;
-        return vec3<f32>(r * sin(beta) * cs, r * sin(beta) * sn, sensor.cylinder_length + r * cos(beta));
-    }
-    return vec3<f32>(sensor.radius * cs, sensor.radius * sn, sensor.cylinder_length - (c.x - sensor.junction_s));
+// The undeformed surface over disc position u: its point and outward normal at u's surface
+// coordinates (Finger::point_at), with the azimuth's cosine and sine taken from u itself (no
+// atan2, cos or sin of it; at the tip, phi = 0 as SurfaceCoord::from_disc has it).
+struct SurfaceAt {
+    point: vec3<f32>,
+    normal: vec3<f32>,
 }
 
-// Outward unit normal at coordinates (s, phi).
-fn surface_normal(c: vec2<f32>) -> vec3<f32> {
-    let cs = cos(c.y);
-    let sn = sin(c.y);
-    if c.x <= sensor.junction_s {
-        let beta = c.x / sensor.radius;
-        return vec3<f32>(sin(beta) * cs, sin(beta) * sn, cos(beta));
+fn surface_at_disc(u: vec2<f32>) -> SurfaceAt {
+    let s = length(u);
+    var dir = vec2<f32>(1.0, 0.0);
+    if s > 0.0 {
+        dir = u / s;
     }
-    return vec3<f32>(cs, sn, 0.0);
+    let r = sensor.radius;
+    if s <= sensor.junction_s {
+        let beta = s / r;
+        let sb = sin(beta);
+        let cb = cos(beta);
+        return SurfaceAt(vec3<f32>(r * sb * dir, sensor.cylinder_length + r * cb), vec3<f32>(sb * dir, cb));
+    }
+    return SurfaceAt(vec3<f32>(r * dir, sensor.cylinder_length - (s - sensor.junction_s)), vec3<f32>(dir, 0.0));
 }
 
 // Radius of the parallel circle at arc length s.
@@ -292,14 +297,6 @@ fn parallel_radius(s: f32) -> f32 {
 }
 
 // ---- The unrolled disc (src/render/mod.rs HeightfieldGrid) ----
-
-fn disc_of(c: vec2<f32>) -> vec2<f32> {
-    return c.x * vec2<f32>(cos(c.y), sin(c.y));
-}
-
-fn coord_of_disc(u: vec2<f32>) -> vec2<f32> {
-    return vec2<f32>(length(u), atan2(u.y, u.x));
-}
 
 fn texel_centre(i: u32, j: u32) -> vec2<f32> {
     return (vec2<f32>(f32(i), f32(j)) + 0.5) * sensor.texel_mm - sensor.half_size_mm;

@@ -809,6 +809,8 @@ fn render_samples(
     config.render.noise = 0.0;
     let render_sensor = Sensor::from_config(spec.sensor.name.clone(), config)?;
     let mut renderer = Renderer::new(&render_sensor)?;
+    // Every object's contact pipeline now: start-up, not the first batch's frames.
+    renderer.ready_objects(objects)?;
     report.startup = start.elapsed();
     let start = Instant::now();
     let needs_look = background.is_some()

@@ -7,7 +7,7 @@
 //! Frames of a batch are recorded into one submission, each into its own slice of the
 //! output buffers, and read back together.
 
-use super::uniforms::{FrameUniform, SensorUniform};
+use super::uniforms::{object_kind, FrameUniform, SensorUniform};
 use super::{
     contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press,
     Rect,
@@ -34,13 +34,13 @@ const MAX_CACHED_GRIDS: usize = 16;
 pub const MAX_BATCH: usize = 8;
 
 struct Pipelines {
-    contact: wgpu::ComputePipeline,
     blend_meridian: wgpu::ComputePipeline,
     blend_azimuth: wgpu::ComputePipeline,
     skin_normals: wgpu::ComputePipeline,
     camera: wgpu::ComputePipeline,
     select_touched: wgpu::ComputePipeline,
-    camera_touched: wgpu::ComputePipeline,
+    camera_shallow: wgpu::ComputePipeline,
+    camera_deep: wgpu::ComputePipeline,
     add_noise: wgpu::ComputePipeline,
     unproject_pixels: wgpu::ComputePipeline,
 }
@@ -165,6 +165,12 @@ pub struct Renderer {
     sensor: Sensor,
     grid: HeightfieldGrid,
     pipelines: Pipelines,
+    /// The contact stage's pipeline per object kind (FrameUniform `object_kind`), built when
+    /// a kind is first rendered: the kind is a pipeline constant (shaders/contact.wgsl).
+    contact_pipelines: HashMap<u32, wgpu::ComputePipeline>,
+    /// What those are built with: the renderer's pipeline layout and the sensor's constants.
+    pipeline_layout: wgpu::PipelineLayout,
+    constants: [(&'static str, f64); 4],
     layout: wgpu::BindGroupLayout,
     sensor_buffer: wgpu::Buffer,
     penetration: wgpu::Buffer,
@@ -251,13 +257,22 @@ fn map_texture(
 
 /// Words of a frame's `counters` slice (shaders/shared/common.wgsl).
 const OVER_PRESSED: usize = 0;
-const TOUCHED_COUNT: usize = 1;
-const TOUCHED_DISPATCH: u64 = 2;
+const SHALLOW_COUNT: usize = 1;
+const DEEP_COUNT: usize = 2;
+/// The shallow and the deep pass's indirect dispatch arguments: three words each, at a
+/// 16-byte stride from here.
+const SHALLOW_DISPATCH: u64 = 4;
 const TOUCHED_LIST: u64 = 64;
 /// Bytes of the counters before the touched list.
 const COUNTER_HEADER_BYTES: u64 = TOUCHED_LIST * 4;
-/// Bytes of one frame's indirect dispatch arguments (three words, 16-byte stride).
-const DISPATCH_ARGS_BYTES: u64 = 16;
+/// Bytes of one frame's indirect dispatch arguments: the shallow pass's three words, then at
+/// 16 bytes the deep pass's.
+const DISPATCH_ARGS_BYTES: u64 = 32;
+
+/// Pixels on a frame's touched list (both kinds), from its counters.
+fn touched_pixels(counters: &[u32]) -> u64 {
+    counters[SHALLOW_COUNT] as u64 + counters[DEEP_COUNT] as u64
+}
 
 /// Two vec4 per pixel (shaders/shared/common.wgsl `PROBES_STRIDE`).
 const PROBES_BYTES_PER_PIXEL: u64 = 2 * 16;
@@ -414,13 +429,13 @@ impl Renderer {
             create_compute_pipeline_with(ctx, stage, entry, Some(&pipeline_layout), &constants)
         };
         let pipelines = Pipelines {
-            contact: p("contact", "contact")?,
             blend_meridian: p("elastomer", "blend_meridian")?,
             blend_azimuth: p("elastomer", "blend_azimuth")?,
             skin_normals: p("camera", "skin_normals")?,
             camera: p("camera", "camera")?,
             select_touched: p("camera", "select_touched")?,
-            camera_touched: p("camera", "camera_touched")?,
+            camera_shallow: p("camera", "camera_shallow")?,
+            camera_deep: p("camera", "camera_deep")?,
             add_noise: p("leds", "add_noise")?,
             unproject_pixels: p("camera", "unproject_pixels")?,
         };
@@ -437,6 +452,9 @@ impl Renderer {
             sensor: sensor.clone(),
             grid,
             pipelines,
+            contact_pipelines: HashMap::new(),
+            pipeline_layout,
+            constants,
             layout,
             sensor_buffer,
             penetration: storage(ctx, "geltip penetration", texels * 4, none),
@@ -653,11 +671,23 @@ impl Renderer {
         rect: Rect,
     ) {
         self.record_select(encoder, bind, slot, rect);
-        let args = slot * DISPATCH_ARGS_BYTES;
-        self.dispatch_indirect(encoder, &self.pipelines.camera_touched, bind, args);
+        self.record_touched_passes(encoder, bind, slot);
     }
 
-    /// The touched list of `rect` and the copy of its dispatch size to `dispatch_args`.
+    /// Frame `slot`'s passes over its touched list: the shallow pixels', then the deep ones'.
+    fn record_touched_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        slot: u64,
+    ) {
+        let args = slot * DISPATCH_ARGS_BYTES;
+        let p = &self.pipelines;
+        self.dispatch_indirect(encoder, &p.camera_shallow, bind, args);
+        self.dispatch_indirect(encoder, &p.camera_deep, bind, args + 16);
+    }
+
+    /// The touched list of `rect` and the copy of its passes' sizes to `dispatch_args`.
     fn record_select(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -669,10 +699,10 @@ impl Renderer {
         Self::dispatch(encoder, &self.pipelines.select_touched, bind, g);
         encoder.copy_buffer_to_buffer(
             &self.counters,
-            slot * self.counter_bytes + TOUCHED_DISPATCH * 4,
+            slot * self.counter_bytes + SHALLOW_DISPATCH * 4,
             &self.dispatch_args,
             slot * DISPATCH_ARGS_BYTES,
-            Some(12),
+            Some(DISPATCH_ARGS_BYTES),
         );
     }
 
@@ -781,18 +811,19 @@ impl Renderer {
     fn record_heightfield(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        bind: &wgpu::BindGroup,
+        (bind, kind): (&wgpu::BindGroup, u32),
         (t, pressed): (Rect, Rect),
         region: Rect,
         field_offset: u64,
-    ) {
-        for (k, (_, pipeline, map)) in self.heightfield_stages().into_iter().enumerate() {
+    ) -> Result<()> {
+        for (k, (_, pipeline, map)) in self.heightfield_stages(kind)?.into_iter().enumerate() {
             let rect = if k == 0 { pressed } else { t };
             self.record_texels(encoder, bind, pipeline, map, rect, region);
             if k == 0 {
                 self.copy_field(encoder, pressed, field_offset);
             }
         }
+        Ok(())
     }
 
     /// Copies the contact pass's own penetration (left in `height` over the rows of `t`, its
@@ -850,14 +881,18 @@ impl Renderer {
     }
 
     /// The heightfield stages in order: name, pipeline, and the map its output refreshes.
-    fn heightfield_stages(&self) -> [(&'static str, &wgpu::ComputePipeline, Map); 4] {
+    /// (The contact stage's is that of object kind `kind`.)
+    fn heightfield_stages(
+        &self,
+        kind: u32,
+    ) -> Result<[(&'static str, &wgpu::ComputePipeline, Map); 4]> {
         let p = &self.pipelines;
-        [
-            ("contact", &p.contact, Map::Penetration),
+        Ok([
+            ("contact", self.contact_pipeline(kind)?, Map::Penetration),
             ("elastomer: meridians", &p.blend_meridian, Map::Elastomer),
             ("elastomer: parallels", &p.blend_azimuth, Map::Height),
             ("elastomer: skin normals", &p.skin_normals, Map::Elastomer),
-        ]
+        ])
     }
 
     /// One heightfield stage over `t`, then the copy of `region` of its output into `map`.
@@ -920,8 +955,49 @@ impl Renderer {
 
     fn prepare(&mut self, press: &Press, noise_seed: u32) -> Result<Prepared> {
         let prepared = prepare_contact(&self.sensor, &self.grid, press, noise_seed)?;
-        self.upload_grid(&prepared.press.object);
+        self.ready_object(&prepared)?;
         Ok(prepared)
+    }
+
+    /// What the GPU needs before it renders a prepared contact's object: the contact
+    /// pipeline for its kind and, for a mesh, its baked SDF grid.
+    fn ready_object(&mut self, prepared: &Prepared) -> Result<()> {
+        self.build_contact_pipeline(prepared.uniform.object_kind)?;
+        self.upload_grid(&prepared.press.object);
+        Ok(())
+    }
+
+    /// Builds the contact stage's pipelines for `objects` now rather than at their first
+    /// frame (each kind of object has its own: 25-130 ms on lavapipe with and without Mesa's
+    /// shader cache). For runs that time their frames, such as `geltip dataset`.
+    pub fn ready_objects(&mut self, objects: &[Arc<Object>]) -> Result<()> {
+        for object in objects {
+            self.build_contact_pipeline(object_kind(object))?;
+        }
+        Ok(())
+    }
+
+    fn build_contact_pipeline(&mut self, kind: u32) -> Result<()> {
+        if !self.contact_pipelines.contains_key(&kind) {
+            let mut constants = self.constants.to_vec();
+            constants.push(("OBJECT_KIND", kind as f64));
+            let pipeline = create_compute_pipeline_with(
+                self.ctx,
+                "contact",
+                "contact",
+                Some(&self.pipeline_layout),
+                &constants,
+            )?;
+            self.contact_pipelines.insert(kind, pipeline);
+        }
+        Ok(())
+    }
+
+    /// The contact stage's pipeline for object kind `kind` (built by [`Self::ready_object`]).
+    fn contact_pipeline(&self, kind: u32) -> Result<&wgpu::ComputePipeline> {
+        self.contact_pipelines
+            .get(&kind)
+            .ok_or_else(|| GeltipError::Gpu(format!("no contact pipeline for object kind {kind}")))
     }
 
     /// A mesh's baked SDF grid on the GPU, uploaded once per mesh.
@@ -1034,8 +1110,9 @@ impl Renderer {
             self.seed_counter = self.seed_counter.wrapping_add(1);
             p.uniform.noise_seed =
                 self.sensor.config.render.noise_seed ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
-            let object = p.press.object.clone();
-            self.upload_grid(&object);
+        }
+        for p in &prepared {
+            self.ready_object(p)?;
         }
         let mut out = Vec::with_capacity(prepared.len());
         let Ran { frames, fields } = self.run(&prepared, &mut total)?;
@@ -1082,11 +1159,11 @@ impl Renderer {
                 self.clear_heightfield(&mut encoder, Some(region));
                 self.record_heightfield(
                     &mut encoder,
-                    bind,
+                    (bind, p.uniform.object_kind),
                     (t, pressed),
                     region,
                     field_offsets[slot],
-                );
+                )?;
                 self.dirty = Some(t);
             }
             if let Some(r) = p.pixel_rect {
@@ -1117,7 +1194,7 @@ impl Renderer {
         let mut frames = Vec::with_capacity(prepared.len());
         for part in parts {
             let c = part.counters;
-            timings.touched_pixels += c[TOUCHED_COUNT] as u64;
+            timings.touched_pixels += touched_pixels(&c);
             let frame = Frame {
                 width: w,
                 height: h,
@@ -1139,7 +1216,7 @@ impl Renderer {
 
     /// Frame `slot`'s start: the reference's pixels over the rows `pixel_rect` can change,
     /// zero indentation there, and zero counters (the touched list itself needs no
-    /// clearing: only its first TOUCHED_COUNT words are read).
+    /// clearing: only the places its counts hold are read).
     fn record_frame_start(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -1277,23 +1354,19 @@ impl Renderer {
             (Some(d), Some(t)) => Some(d.union(&t)),
             (d, t) => d.or(t),
         };
-        let pipelines = &self.pipelines;
         enum Step<'a> {
             Clear,
             Texels(&'a wgpu::ComputePipeline, Map),
             Select,
-            Touched(&'a wgpu::ComputePipeline),
+            Touched,
         }
         let mut stages = vec![("copy reference + clear", Step::Clear)];
-        for (name, pipeline, map) in self.heightfield_stages() {
+        for (name, pipeline, map) in self.heightfield_stages(p.uniform.object_kind)? {
             stages.push((name, Step::Texels(pipeline, map)));
         }
         stages.extend([
             ("camera: select touched", Step::Select),
-            (
-                "camera + leds: touched pixels",
-                Step::Touched(&pipelines.camera_touched),
-            ),
+            ("camera + leds: touched pixels", Step::Touched),
         ]);
         let record = |encoder: &mut wgpu::CommandEncoder, step: &Step| match *step {
             Step::Clear => {
@@ -1319,9 +1392,9 @@ impl Renderer {
                     self.record_select(encoder, &bind, 0, r);
                 }
             }
-            Step::Touched(pipeline) => {
+            Step::Touched => {
                 if p.pixel_rect.is_some() {
-                    self.dispatch_indirect(encoder, pipeline, &bind, 0);
+                    self.record_touched_passes(encoder, &bind, 0);
                 }
             }
         };
@@ -1550,13 +1623,17 @@ impl Renderer {
             // the maps must lose what the last frame left outside this one.
             let region = self.dirty.map_or(span, |d| d.union(&span));
             self.clear_heightfield(&mut encoder, Some(region));
-            for (k, (_, pipeline, map)) in self.heightfield_stages().into_iter().enumerate() {
+            // (The contact stage's pipeline is each object's own; the kind given here only
+            // picks the other stages'.)
+            let kind = prepared[0].uniform.object_kind;
+            for (k, (_, pipeline, map)) in self.heightfield_stages(kind)?.into_iter().enumerate() {
                 if k == 0 {
                     for ((p, bind), &at) in prepared.iter().zip(&contact_binds).zip(&field_offsets)
                     {
                         if let Some(r) = p.pressed_rect {
                             let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
-                            Self::dispatch(&mut encoder, pipeline, bind, g);
+                            let contact = self.contact_pipeline(p.uniform.object_kind)?;
+                            Self::dispatch(&mut encoder, contact, bind, g);
                             self.copy_field(&mut encoder, r, at);
                         }
                     }
@@ -1577,12 +1654,12 @@ impl Renderer {
             }
             encoder.copy_buffer_to_buffer(
                 &self.counters,
-                TOUCHED_DISPATCH * 4,
+                SHALLOW_DISPATCH * 4,
                 &self.dispatch_args,
                 0,
-                Some(12),
+                Some(DISPATCH_ARGS_BYTES),
             );
-            self.dispatch_indirect(&mut encoder, &self.pipelines.camera_touched, &whole_bind, 0);
+            self.record_touched_passes(&mut encoder, &whole_bind, 0);
         }
         if self.sensor.config.render.noise > 0.0 {
             Self::dispatch(
@@ -1605,7 +1682,7 @@ impl Renderer {
             return Err(GeltipError::Gpu("read back no scene frame".to_string()));
         };
         let c = part.counters;
-        timings.touched_pixels = c[TOUCHED_COUNT] as u64;
+        timings.touched_pixels = touched_pixels(&c);
         let frame = Frame {
             width: w,
             height: h,

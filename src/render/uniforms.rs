@@ -163,6 +163,14 @@ impl SensorUniform {
     }
 }
 
+/// `object_kind` of an object: a built-in solid's id, or [`GRID_OBJECT`] for a mesh.
+pub fn object_kind(object: &Object) -> u32 {
+    match object {
+        Object::Solid(s) => s.id(),
+        Object::Mesh { .. } => GRID_OBJECT,
+    }
+}
+
 impl FrameUniform {
     /// The reference frame: no contact, every pixel.
     pub fn reference(sensor: &Sensor, noise_seed: u32) -> Self {
@@ -185,10 +193,10 @@ impl FrameUniform {
         // Rows of object_from_world = columns of world_from_object.
         let m = pose.world_from_object;
         let row = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
-        let (kind, dims, grid_origin) = match object {
-            Object::Solid(s) => (s.id(), [0; 3], [0.0; 4]),
+        let kind = object_kind(object);
+        let (dims, grid_origin) = match object {
+            Object::Solid(_) => ([0; 3], [0.0; 4]),
             Object::Mesh { grid, .. } => (
-                GRID_OBJECT,
                 grid.dims,
                 [
                     grid.origin.x as f32,
