@@ -10,10 +10,13 @@
 //! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps.
 
+use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
+use geltip::object::{Object, Solid};
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
 use geltip::render::{cpu, Contact, Press};
 use geltip::sensor::Sensor;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// `n` contacts: the paper's 56 taps (seven solids at its eight positions), over and over.
@@ -115,14 +118,25 @@ fn main() -> anyhow::Result<()> {
     let sensor = Sensor::load(&sensor_arg)?;
     let start = Instant::now();
     let mut r = Renderer::new(&sensor)?;
+    let startup = start.elapsed();
+    // The contact stage's pipeline of each object kind is built at its first frame; build
+    // the seven solids' now, so no pass times a build (their time is printed).
+    let start = Instant::now();
+    let solids: Vec<_> = experiment::all_taps(&Protocol::default())
+        .iter()
+        .map(|c| c.object.clone())
+        .collect();
+    r.ready_objects(&solids)?;
+    let contact_pipelines = start.elapsed();
     println!(
-        "geltip render benchmark on {}: sensor {}, {}x{}, heightfield {}, start-up {:.2} s; freed frame memory {}; median of {repeat} passes",
+        "geltip render benchmark on {}: sensor {}, {}x{}, heightfield {}, start-up {:.2} s (+ {:.2} s for the seven solids' contact pipelines); freed frame memory {}; median of {repeat} passes",
         geltip::gpu::host_description(r.adapter()),
         sensor.name,
         sensor.width,
         sensor.height,
         sensor.config.render.heightfield_texels,
-        start.elapsed().as_secs_f64(),
+        startup.as_secs_f64(),
+        contact_pipelines.as_secs_f64(),
         if kept { "kept" } else { "returned to the kernel" }
     );
     println!(
@@ -228,8 +242,8 @@ fn main() -> anyhow::Result<()> {
         &mut cpu_passes,
     );
 
-    // Where a contact frame's time goes, averaged over eight of the paper's taps (every
-    // solid, every position): from timestamps between the stages of one submission where
+    // Where a contact frame's time goes, averaged over eight of the paper's taps and over
+    // random dataset contacts: from timestamps between the stages of one submission where
     // the device writes them (lavapipe does), else each stage submitted and waited for on
     // its own (then a stage's time includes a submission and a wait).
     println!();
@@ -238,21 +252,37 @@ fn main() -> anyhow::Result<()> {
     } else {
         "ms, own submit"
     };
-    println!("| {:<28} | {:>14} |", "stage (one contact)", how);
-    println!("|{:-<30}|{:->16}|", "", "");
-    let mut totals: Vec<(&str, f64)> = Vec::new();
-    // Every seventh of the paper's taps: each solid and each position once.
-    let sample: Vec<&Contact> = list.iter().step_by(7).take(8).collect();
-    for c in sample.iter().copied() {
-        for (i, (name, d)) in r.profile_stages(c)?.into_iter().enumerate() {
-            if totals.len() <= i {
-                totals.push((name, 0.0));
+    println!(
+        "| {:<28} | {:>14} | {:>22} |",
+        "stage (one contact)", how, "random dataset contacts"
+    );
+    println!("|{:-<30}|{:->16}|{:->24}|", "", "", "");
+    // Every seventh of the paper's taps (each solid and each position once), and 100 of
+    // `geltip dataset`'s random contacts (seed 1, the seven solids, default depths).
+    let taps: Vec<Contact> = list.iter().step_by(7).take(8).cloned().collect();
+    let objects: Vec<_> = Solid::ALL
+        .iter()
+        .map(|s| Arc::new(Object::Solid(*s)))
+        .collect();
+    let depths = dataset::default_depth_range(sensor.finger.shell_thickness);
+    let random = (0..100)
+        .map(|k| dataset::sample_contact(&sensor, &objects, depths, 1, k))
+        .collect::<geltip::Result<Vec<_>>>()?;
+    let mut columns = Vec::new();
+    for sample in [&taps, &random] {
+        let mut totals: Vec<(&str, f64)> = Vec::new();
+        for c in sample {
+            for (i, (name, d)) in r.profile_stages(c)?.into_iter().enumerate() {
+                if totals.len() <= i {
+                    totals.push((name, 0.0));
+                }
+                totals[i].1 += d.as_secs_f64() * 1e3 / sample.len() as f64;
             }
-            totals[i].1 += d.as_secs_f64() * 1e3 / sample.len() as f64;
         }
+        columns.push(totals);
     }
-    for (name, ms) in totals {
-        println!("| {name:<28} | {ms:>14.3} |");
+    for ((name, ms), (_, random_ms)) in columns[0].iter().zip(&columns[1]) {
+        println!("| {name:<28} | {ms:>14.3} | {random_ms:>22.3} |");
     }
     Ok(())
 }
