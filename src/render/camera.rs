@@ -157,6 +157,8 @@ pub fn select_touched(
 }
 
 /// The skin point a pixel sees, or `None` outside the image or the lens's field of view.
+/// Mirror of both of the shader's touched passes: `skin_over_surface` for a ray whose probes
+/// see skin moved less than [`SHALLOW_MM`], `march_to_skin` for the others.
 pub fn cast_ray(
     sensor: &Sensor,
     grid: &HeightfieldGrid,
