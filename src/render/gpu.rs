@@ -816,12 +816,11 @@ impl Renderer {
         region: Rect,
         field_offset: u64,
     ) -> Result<()> {
-        for (k, (_, pipeline, map)) in self.heightfield_stages(kind)?.into_iter().enumerate() {
-            let rect = if k == 0 { pressed } else { t };
-            self.record_texels(encoder, bind, pipeline, map, rect, region);
-            if k == 0 {
-                self.copy_field(encoder, pressed, field_offset);
-            }
+        let contact = self.contact_pipeline(kind)?;
+        self.record_texels(encoder, bind, contact, Map::Penetration, pressed, region);
+        self.copy_field(encoder, pressed, field_offset);
+        for (_, pipeline, map) in self.elastomer_stages() {
+            self.record_texels(encoder, bind, pipeline, map, t, region);
         }
         Ok(())
     }
@@ -880,19 +879,15 @@ impl Renderer {
             .collect()
     }
 
-    /// The heightfield stages in order: name, pipeline, and the map its output refreshes.
-    /// (The contact stage's is that of object kind `kind`.)
-    fn heightfield_stages(
-        &self,
-        kind: u32,
-    ) -> Result<[(&'static str, &wgpu::ComputePipeline, Map); 4]> {
+    /// The heightfield stages after the contact stage (whose pipeline is its object's:
+    /// [`Self::contact_pipeline`]), in order: name, pipeline, and the map its output refreshes.
+    fn elastomer_stages(&self) -> [(&'static str, &wgpu::ComputePipeline, Map); 3] {
         let p = &self.pipelines;
-        Ok([
-            ("contact", self.contact_pipeline(kind)?, Map::Penetration),
+        [
             ("elastomer: meridians", &p.blend_meridian, Map::Elastomer),
             ("elastomer: parallels", &p.blend_azimuth, Map::Height),
             ("elastomer: skin normals", &p.skin_normals, Map::Elastomer),
-        ])
+        ]
     }
 
     /// One heightfield stage over `t`, then the copy of `region` of its output into `map`.
@@ -1356,12 +1351,19 @@ impl Renderer {
         };
         enum Step<'a> {
             Clear,
+            Contact(&'a wgpu::ComputePipeline),
             Texels(&'a wgpu::ComputePipeline, Map),
             Select,
             Touched,
         }
-        let mut stages = vec![("copy reference + clear", Step::Clear)];
-        for (name, pipeline, map) in self.heightfield_stages(p.uniform.object_kind)? {
+        let mut stages = vec![
+            ("copy reference + clear", Step::Clear),
+            (
+                "contact",
+                Step::Contact(self.contact_pipeline(p.uniform.object_kind)?),
+            ),
+        ];
+        for (name, pipeline, map) in self.elastomer_stages() {
             stages.push((name, Step::Texels(pipeline, map)));
         }
         stages.extend([
@@ -1375,16 +1377,15 @@ impl Renderer {
                     self.clear_heightfield(encoder, Some(region));
                 }
             }
+            Step::Contact(pipeline) => {
+                if let (Some(pressed), Some(region)) = (p.pressed_rect, region) {
+                    self.record_texels(encoder, &bind, pipeline, Map::Penetration, pressed, region);
+                    self.copy_field(encoder, pressed, 0);
+                }
+            }
             Step::Texels(pipeline, map) => {
-                if let (Some(t), Some(pressed), Some(region)) =
-                    (p.texel_rect, p.pressed_rect, region)
-                {
-                    let contact = matches!(map, Map::Penetration);
-                    let rect = if contact { pressed } else { t };
-                    self.record_texels(encoder, &bind, pipeline, map, rect, region);
-                    if contact {
-                        self.copy_field(encoder, pressed, 0);
-                    }
+                if let (Some(t), Some(region)) = (p.texel_rect, region) {
+                    self.record_texels(encoder, &bind, pipeline, map, t, region);
                 }
             }
             Step::Select => {
@@ -1623,25 +1624,20 @@ impl Renderer {
             // the maps must lose what the last frame left outside this one.
             let region = self.dirty.map_or(span, |d| d.union(&span));
             self.clear_heightfield(&mut encoder, Some(region));
-            // (The contact stage's pipeline is each object's own; the kind given here only
-            // picks the other stages'.)
-            let kind = prepared[0].uniform.object_kind;
-            for (k, (_, pipeline, map)) in self.heightfield_stages(kind)?.into_iter().enumerate() {
-                if k == 0 {
-                    for ((p, bind), &at) in prepared.iter().zip(&contact_binds).zip(&field_offsets)
-                    {
-                        if let Some(r) = p.pressed_rect {
-                            let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
-                            let contact = self.contact_pipeline(p.uniform.object_kind)?;
-                            Self::dispatch(&mut encoder, contact, bind, g);
-                            self.copy_field(&mut encoder, r, at);
-                        }
-                    }
-                } else {
-                    for (t, bind) in texel_pieces.iter().zip(&texel_binds) {
-                        let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
-                        Self::dispatch(&mut encoder, pipeline, bind, g);
-                    }
+            // Each object's contact pass over its own pressed rect, with its own pipeline.
+            for ((p, bind), &at) in prepared.iter().zip(&contact_binds).zip(&field_offsets) {
+                if let Some(r) = p.pressed_rect {
+                    let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
+                    let contact = self.contact_pipeline(p.uniform.object_kind)?;
+                    Self::dispatch(&mut encoder, contact, bind, g);
+                    self.copy_field(&mut encoder, r, at);
+                }
+            }
+            self.copy_to_map(&mut encoder, Map::Penetration, Some(region));
+            for (_, pipeline, map) in self.elastomer_stages() {
+                for (t, bind) in texel_pieces.iter().zip(&texel_binds) {
+                    let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
+                    Self::dispatch(&mut encoder, pipeline, bind, g);
                 }
                 self.copy_to_map(&mut encoder, map, Some(region));
             }
