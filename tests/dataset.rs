@@ -164,6 +164,33 @@ fn same_seed_gives_identical_files_and_pixels_lie_in_masks() {
     assert!(checked >= 5, "only {checked} labels checked");
 }
 
+/// Without a look (noise, jitter, background), images are encoded against the empty
+/// finger's cached rows (`output::PngRowCache`): each must decode to exactly the frame the
+/// renderer gives for the same contact.
+#[test]
+fn images_decode_to_the_rendered_frames() {
+    use geltip::jobs::dataset::{default_depth_range, load_objects, sample_contact, Spec};
+    let dir = scratch("decode");
+    dataset(&dir, &["--count", "6", "--seed", "3"]);
+    let sensor = geltip::sensor::Sensor::preset("paper").unwrap();
+    let spec = Spec::new("paper", sensor.clone(), 6, 3);
+    let objects = load_objects(&spec.objects).unwrap();
+    let depths = default_depth_range(sensor.finger.shell_thickness);
+    let mut renderer = geltip::render::gpu::Renderer::new(&sensor).unwrap();
+    for l in labels(&dir) {
+        let k = l["index"].as_u64().unwrap();
+        let contact = sample_contact(&sensor, &objects, depths, 3, k).unwrap();
+        let (frame, _) = renderer.render(&contact).unwrap();
+        let png = image::open(dir.join(l["image"].as_str().unwrap()))
+            .unwrap()
+            .to_rgb8();
+        assert!(
+            png.as_raw() == frame.to_rgb().as_raw(),
+            "sample {k}: the image differs from the rendered frame"
+        );
+    }
+}
+
 #[test]
 fn shards_merged_equal_the_unsharded_set() {
     let root = scratch("shards");

@@ -22,7 +22,7 @@
 use crate::error::{GeltipError, Result};
 use crate::finger::SurfaceCoord;
 use crate::object::{Object, Solid};
-use crate::output::{self, LineLog, PngColor};
+use crate::output::{self, LineLog, PngColor, PngRowCache};
 use crate::render::gpu::{Renderer, MAX_BATCH};
 use crate::render::{self, Contact, Frame, GroundTruth, Place};
 use crate::sensor::Sensor;
@@ -487,6 +487,9 @@ struct Shared<'a> {
     spec: &'a Spec,
     out: Option<&'a Path>,
     look: Option<Look>,
+    /// The empty finger's rows, filtered and compressed once (fast PNG without a look:
+    /// a sample's image re-encodes only the rows its contact changed).
+    png_rows: Option<PngRowCache>,
     digits: usize,
     labels: Option<Mutex<LineLog>>,
     done: AtomicU64,
@@ -504,10 +507,10 @@ impl Shared<'_> {
         let spec = self.spec;
         let (w, h) = (job.frame.width, job.frame.height);
         let t0 = Instant::now();
-        let rgb = match &self.look {
-            Some(look) => look.apply(spec.seed, job.k, &job.frame),
-            None => job.frame.to_rgb().into_raw(),
-        };
+        let look_rgb = self
+            .look
+            .as_ref()
+            .map(|look| look.apply(spec.seed, job.k, &job.frame));
         let name = format!("{:0width$}", job.k, width = self.digits);
         let image = format!("images/{name}.png");
         let depth = spec.depth_maps.then(|| format!("depth/{name}.npy"));
@@ -525,10 +528,15 @@ impl Shared<'_> {
             .map_err(|e| GeltipError::input(format!("sample {}", job.k), e.to_string()))?;
         let t1 = Instant::now();
         let (compression, filter) = spec.png.settings();
-        let mut files = vec![(
-            image,
-            output::png_bytes(w, h, &rgb, PngColor::Rgb8, compression, filter)?,
-        )];
+        let png = match (&look_rgb, &self.png_rows) {
+            (None, Some(rows)) => rows.encode(&job.frame.rgba)?,
+            (Some(rgb), _) => output::png_bytes(w, h, rgb, PngColor::Rgb8, compression, filter)?,
+            (None, None) => {
+                let rgb = job.frame.to_rgb().into_raw();
+                output::png_bytes(w, h, &rgb, PngColor::Rgb8, compression, filter)?
+            }
+        };
+        let mut files = vec![(image, png)];
         if let Some(depth) = depth {
             files.push((depth, output::npy_f32_bytes(w, h, &job.frame.indentation)?));
         }
@@ -827,6 +835,17 @@ fn render_samples(
             paint_jitter: spec.paint_jitter,
         }
     });
+    let png_rows = match (spec.png, &look) {
+        (PngLevel::Fast, None) => {
+            let reference = renderer.reference();
+            Some(PngRowCache::new(
+                reference.width,
+                reference.height,
+                &reference.rgba,
+            )?)
+        }
+        _ => None,
+    };
     let labels = match out {
         Some(dir) => Some(Mutex::new(LineLog::open(dir.join(LABELS))?)),
         None => None,
@@ -835,6 +854,7 @@ fn render_samples(
         spec,
         out,
         look,
+        png_rows,
         digits: (spec.count - 1).to_string().len().max(6),
         labels,
         done: AtomicU64::new(0),

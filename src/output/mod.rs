@@ -11,6 +11,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{GeltipError, Result};
 
+mod png_rows;
+pub use png_rows::PngRowCache;
+
 /// Writes `bytes` to `path` atomically: a temporary file in the same directory, flushed and
 /// synced, then renamed over `path`. Parent directories are created. On error the temporary
 /// file is removed and `path` is left as it was.
