@@ -4,11 +4,12 @@
 //! rendered and encoded with the files discarded, printing resident memory after 1 000 and
 //! after N samples).
 //!
-//! Rows: samples/s of whole runs (after the renderer's start-up) writing PNG only, and PNG +
-//! depth map + mask, with the split per sample: contact drawing and CPU preparation, GPU
-//! render, readback (on the rendering thread), and post-process, encoding and writing (on
-//! the encoder threads, CPU time summed over them, so they overlap the first three). Then
-//! the PNG compression levels: encode time and size of the same frames at each.
+//! Rows: samples/s of whole runs (after the renderers' start-up) writing PNG only, and PNG +
+//! depth map + mask, with the split per sample: contact drawing and CPU preparation (on its
+//! own thread), GPU render and readback (on the render streams' threads, wall time summed
+//! over the streams), and post-process, encoding and writing (on the encoder threads, wall
+//! time summed over them); all of these overlap. Then the PNG compression levels: encode
+//! time and size of the same frames at each.
 
 use geltip::jobs::dataset::{self, PngLevel, Spec};
 use geltip::output::{self, PngColor};
@@ -59,11 +60,13 @@ fn main() -> anyhow::Result<()> {
     }
     let count: u64 = arg("--count").map_or(Ok(256), |c| c.parse())?;
     println!(
-        "dataset: {} samples per row, sensor {sensor_arg} ({}x{}), {} encoder threads by default\n",
+        "geltip dataset benchmark on {}: {} samples per row, sensor {sensor_arg} ({}x{}), {} encoder threads and {} render streams by default\n",
+        geltip::gpu::host_description(&geltip::gpu::GpuContext::shared()?.adapter_info),
         count,
         sensor.width,
         sensor.height,
-        dataset::default_workers()
+        dataset::default_workers(),
+        dataset::default_streams()
     );
     println!(
         "| {:<34} | {:>6} | {:>9} | {:>7} | {:>7} | {:>8} | {:>6} | {:>7} | {:>6} | {:>7} |",
@@ -85,20 +88,26 @@ fn main() -> anyhow::Result<()> {
             .join("|")
     );
     let tmp = std::env::temp_dir().join(format!("geltip-bench-dataset-{}", std::process::id()));
-    let rows: [(&str, bool, usize, PngLevel); 5] = [
-        ("PNG (fast)", false, 0, PngLevel::Fast),
-        ("PNG (fast) + depth + mask", true, 0, PngLevel::Fast),
-        ("PNG (fast), 1 encoder thread", false, 1, PngLevel::Fast),
-        ("PNG (none)", false, 0, PngLevel::None),
-        ("PNG (default)", false, 0, PngLevel::Default),
+    // (name, depth + mask, encoder threads, render streams, level); 0: the default.
+    let rows: [(&str, bool, usize, usize, PngLevel); 7] = [
+        ("PNG (fast)", false, 0, 0, PngLevel::Fast),
+        ("PNG (fast) + depth + mask", true, 0, 0, PngLevel::Fast),
+        ("PNG (fast), 1 render stream", false, 0, 1, PngLevel::Fast),
+        ("PNG (fast), 2 render streams", false, 0, 2, PngLevel::Fast),
+        ("PNG (fast), 1 encoder thread", false, 1, 0, PngLevel::Fast),
+        ("PNG (none)", false, 0, 0, PngLevel::None),
+        ("PNG (default)", false, 0, 0, PngLevel::Default),
     ];
-    for (i, (name, extras, workers, png)) in rows.into_iter().enumerate() {
+    for (i, (name, extras, workers, streams, png)) in rows.into_iter().enumerate() {
         let mut spec = Spec::new(&sensor_arg, sensor.clone(), count, 1);
         spec.depth_maps = extras;
         spec.masks = extras;
         spec.png = png;
         if workers > 0 {
             spec.workers = workers;
+        }
+        if streams > 0 {
+            spec.streams = streams;
         }
         let out = tmp.join(i.to_string());
         let r = dataset::run(&spec, Some(&out), |_| {})?;

@@ -204,6 +204,9 @@ enum Command {
         /// Encoder threads (default: the cores available).
         #[arg(long)]
         jobs: Option<usize>,
+        /// Render streams, each a renderer on a device of its own (default 2; 1..=4).
+        #[arg(long)]
+        streams: Option<usize>,
         /// Join shard directories into OUT: --merge OUT SHARD_DIR...
         #[arg(long, num_args = 2.., value_name = "DIR")]
         merge: Vec<PathBuf>,
@@ -520,6 +523,7 @@ fn run(cli: Cli) -> Result<()> {
             background,
             png,
             jobs,
+            streams,
             merge,
         } => {
             let command: Vec<String> = std::env::args().collect();
@@ -552,6 +556,7 @@ fn run(cli: Cli) -> Result<()> {
             spec.background = background;
             spec.png = dataset::PngLevel::from_name(&png)?;
             spec.workers = jobs.unwrap_or(spec.workers);
+            spec.streams = streams.unwrap_or(spec.streams);
             spec.command = command;
             let report = dataset::run(&spec, Some(&out), progress_reporter("samples")?)?;
             println!(

@@ -130,6 +130,19 @@ fn same_seed_gives_identical_files_and_pixels_lie_in_masks() {
     assert_eq!(fa.len(), 1 + 1 + 3 * 9);
     assert!(fa == files(&b), "two runs with the same seed differ");
 
+    // Render streams share out the batches, not the samples' draws: one stream and four
+    // write the same files.
+    for (name, streams) in [("one", "1"), ("four", "4")] {
+        let d = root.join(name);
+        let mut opts = OPTS.to_vec();
+        opts.extend(["--streams", streams]);
+        dataset(&d, &opts);
+        assert!(
+            fa == files(&d),
+            "{streams} render streams changed the files"
+        );
+    }
+
     // Another seed gives other samples.
     let mut other = OPTS;
     other[3] = "8";
@@ -343,6 +356,10 @@ fn bad_input_gives_one_line_errors() {
     assert!(e.contains("object 'teapot'"), "{e}");
     let e = with(&["--count", "5", "--depth-range", "2..1"]);
     assert!(e.contains("--depth-range"), "{e}");
+    for streams in ["0", "5"] {
+        let e = with(&["--count", "5", "--streams", streams]);
+        assert!(e.contains("--streams: must lie in 1..=4"), "{e}");
+    }
 
     // A directory that cannot be made: under a regular file.
     let file = root.join("a-file");

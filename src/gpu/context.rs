@@ -48,6 +48,13 @@ pub struct GpuContext {
 /// The shared context, or the one-line error its creation gave.
 static SHARED: OnceLock<std::result::Result<GpuContext, SharedError>> = OnceLock::new();
 
+/// Devices for render streams 1.. (stream 0 is [`SHARED`]): see [`GpuContext::stream`].
+static STREAMS: [OnceLock<std::result::Result<GpuContext, SharedError>>; MAX_STREAMS - 1] =
+    [const { OnceLock::new() }; MAX_STREAMS - 1];
+
+/// How many render streams [`GpuContext::stream`] gives.
+pub const MAX_STREAMS: usize = 4;
+
 /// A creation error kept for later callers of [`GpuContext::shared`] (`GeltipError` is not `Clone`).
 #[derive(Debug)]
 enum SharedError {
@@ -145,6 +152,29 @@ impl GpuContext {
     /// If creation failed, every later call returns the same error (without retrying).
     pub fn shared() -> Result<&'static GpuContext> {
         match SHARED.get_or_init(|| GpuContext::new().map_err(|e| SharedError::from_error(&e))) {
+            Ok(ctx) => Ok(ctx),
+            Err(e) => Err(e.to_error()),
+        }
+    }
+
+    /// The device of render stream `i` (< [`MAX_STREAMS`]): stream 0 is
+    /// [`GpuContext::shared`], each other a device of its own, created on first use and kept
+    /// for the process. Work on different devices runs at the same time: on lavapipe each
+    /// device has its own queue thread and its own pool of workers, so one stream's
+    /// dispatches fill the cores another's leave idle (small dispatches, the gaps between
+    /// dispatches and submissions).
+    pub fn stream(i: usize) -> Result<&'static GpuContext> {
+        let slot = match i {
+            0 => return GpuContext::shared(),
+            i if i < MAX_STREAMS => &STREAMS[i - 1],
+            _ => {
+                return Err(GeltipError::input(
+                    "render streams",
+                    format!("at most {MAX_STREAMS}, asked for stream {i}"),
+                ))
+            }
+        };
+        match slot.get_or_init(|| GpuContext::new().map_err(|e| SharedError::from_error(&e))) {
             Ok(ctx) => Ok(ctx),
             Err(e) => Err(e.to_error()),
         }

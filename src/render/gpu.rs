@@ -320,9 +320,15 @@ fn groups(n: u32, size: u32) -> u32 {
 }
 
 impl Renderer {
-    /// Compiles the pipelines, allocates the buffers and renders the empty finger once.
+    /// Compiles the pipelines, allocates the buffers and renders the empty finger once, on
+    /// the process's shared device.
     pub fn new(sensor: &Sensor) -> Result<Renderer> {
-        let ctx = GpuContext::shared()?;
+        Renderer::on(sensor, GpuContext::shared()?)
+    }
+
+    /// As [`Renderer::new`], on the device of `ctx` (e.g. [`GpuContext::stream`]: renderers
+    /// on different devices render at the same time).
+    pub fn on(sensor: &Sensor, ctx: &'static GpuContext) -> Result<Renderer> {
         let grid = HeightfieldGrid::for_sensor(sensor);
         let texels = grid.texels as u64 * grid.texels as u64;
         let pixels = sensor.width as u64 * sensor.height as u64;
