@@ -4,7 +4,8 @@
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
-//! into CPU preparation, GPU render (submit + wait) and readback (copy, map, unpack), with the
+//! into CPU preparation, GPU render (submit + wait, the copies for reading back included) and
+//! readback (unpacking the mapped frames), with the
 //! pixels re-rendered per frame; one and two non-overlapping contacts per frame
 //! (`render_scene`); and the CPU alternative (the CPU mirrors over the same footprint,
 //! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;

@@ -118,8 +118,38 @@ pub fn read_ranges_with<R>(
     ctx: &GpuContext,
     staging: Option<&wgpu::Buffer>,
     ranges: &[(&wgpu::Buffer, u64, u64)],
-    mut unpack: impl FnMut(usize, &[u8]) -> R,
+    unpack: impl FnMut(usize, &[u8]) -> R,
 ) -> Result<Vec<R>> {
+    let total = staging_bytes(ranges)?;
+    if total == 0 {
+        let mut unpack = unpack;
+        return Ok((0..ranges.len()).map(|k| unpack(k, &[])).collect());
+    }
+    let fresh;
+    let staging = match staging {
+        Some(s) if fits(s, total) => s,
+        _ => {
+            fresh = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip readback staging"),
+                size: total,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            &fresh
+        }
+    };
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("geltip readback"),
+        });
+    record_ranges(&mut encoder, staging, ranges)?;
+    let submission = ctx.submit("buffer readback copy", encoder)?;
+    unpack_ranges(ctx, staging, ranges, submission, unpack)
+}
+
+/// Bytes a staging buffer needs for `ranges` (each checked as [`read_ranges`] says).
+pub fn staging_bytes(ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<u64> {
     let what = "buffer readback";
     let mut total = 0u64;
     for &(buffer, offset, bytes) in ranges {
@@ -153,33 +183,36 @@ pub fn read_ranges_with<R>(
         }
         total += copy_size;
     }
-    if total == 0 {
-        return Ok((0..ranges.len()).map(|k| unpack(k, &[])).collect());
+    Ok(total)
+}
+
+fn fits(staging: &wgpu::Buffer, total: u64) -> bool {
+    staging.size() >= total
+        && staging
+            .usage()
+            .contains(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST)
+}
+
+/// Records the copies of `ranges` into `staging`, one after another, in `encoder`: the
+/// readback half of a submission that also holds the work it reads, so a frame costs one
+/// round trip. Then [`unpack_ranges`] after submitting. `staging` must hold
+/// [`staging_bytes`] (`MAP_READ | COPY_DST`).
+pub fn record_ranges(
+    encoder: &mut wgpu::CommandEncoder,
+    staging: &wgpu::Buffer,
+    ranges: &[(&wgpu::Buffer, u64, u64)],
+) -> Result<()> {
+    let total = staging_bytes(ranges)?;
+    if !fits(staging, total) {
+        return Err(GeltipError::input(
+            "buffer readback",
+            format!(
+                "a staging buffer of {} bytes ({:?}) cannot take {total} bytes",
+                staging.size(),
+                staging.usage()
+            ),
+        ));
     }
-    let fresh;
-    let staging = match staging {
-        Some(s)
-            if s.size() >= total
-                && s.usage()
-                    .contains(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST) =>
-        {
-            s
-        }
-        _ => {
-            fresh = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("geltip readback staging"),
-                size: total,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            &fresh
-        }
-    };
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("geltip readback"),
-        });
     let mut at = 0u64;
     for &(buffer, offset, bytes) in ranges {
         let copy_size = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
@@ -188,7 +221,24 @@ pub fn read_ranges_with<R>(
         }
         at += copy_size;
     }
-    let submission = ctx.submit("buffer readback copy", encoder)?;
+    Ok(())
+}
+
+/// Waits for `submission` (which holds [`record_ranges`]'s copies), maps `staging` and hands
+/// each range's bytes to `unpack(index, bytes)`.
+pub fn unpack_ranges<R>(
+    ctx: &GpuContext,
+    staging: &wgpu::Buffer,
+    ranges: &[(&wgpu::Buffer, u64, u64)],
+    submission: wgpu::SubmissionIndex,
+    mut unpack: impl FnMut(usize, &[u8]) -> R,
+) -> Result<Vec<R>> {
+    let what = "buffer readback";
+    let total = staging_bytes(ranges)?;
+    if total == 0 {
+        ctx.wait(submission, what)?;
+        return Ok((0..ranges.len()).map(|k| unpack(k, &[])).collect());
+    }
     map_read(ctx, staging, total, submission, what)?;
     let result = staging
         .get_mapped_range(..total)

@@ -13,7 +13,7 @@ use super::{
     Rect,
 };
 use crate::error::{GeltipError, Result};
-use crate::gpu::readback::{read_buffer, read_ranges_with};
+use crate::gpu::readback::{read_buffer, record_ranges, staging_bytes, unpack_ranges};
 use crate::gpu::shaders::create_compute_pipeline_with;
 use crate::gpu::GpuContext;
 use crate::object::Object;
@@ -50,6 +50,14 @@ struct FrameParts {
     rgba: Vec<u8>,
     indentation: Vec<f32>,
     counters: Vec<u32>,
+}
+
+/// What [`Renderer::read_frames`] gives: each frame's parts, each contact's penetration
+/// field, and when the submission's work was done and mapped (render time ends there).
+struct ReadFrames {
+    frames: Vec<FrameParts>,
+    fields: Vec<PenetrationField>,
+    mapped: Instant,
 }
 
 /// One contact's penetration over its texel rect's rows, as read back.
@@ -142,9 +150,10 @@ fn prepare_contact(
 pub struct Timings {
     /// CPU work before recording: poses, footprints, uniforms.
     pub prepare: Duration,
-    /// Recording, submitting and waiting for the GPU work.
+    /// Recording, submitting and waiting for the GPU work, which ends with copying the
+    /// frames to mappable memory (one submission, one wait), and mapping them.
     pub render: Duration,
-    /// Copying the frames to mappable memory, mapping and unpacking them.
+    /// Unpacking the mapped frames into images and labels.
     pub readback: Duration,
     /// Pixels the camera and LED stages re-rendered (the touched lists' lengths), summed.
     pub touched_pixels: u64,
@@ -1179,9 +1188,6 @@ impl Renderer {
                 );
             }
         }
-        self.ctx.submit_and_wait("rendering contacts", encoder)?;
-        let rendered = Instant::now();
-        timings.render += rendered - start;
         let rows: Vec<(u64, u64)> = prepared
             .iter()
             .map(|p| self.changed_rows(p.pixel_rect))
@@ -1191,9 +1197,12 @@ impl Renderer {
             .zip(&field_offsets)
             .map(|(p, &at)| p.field_range(at, self.grid.texels))
             .collect();
-        let (parts, fields) = self.read_frames(&rows, &field_ranges)?;
+        let read = self.read_frames("rendering contacts", encoder, &rows, &field_ranges)?;
+        let rendered = read.mapped;
+        timings.render += rendered - start;
+        let fields = read.fields;
         let mut frames = Vec::with_capacity(prepared.len());
-        for part in parts {
+        for part in read.frames {
             let c = part.counters;
             timings.touched_pixels += touched_pixels(&c);
             let frame = Frame {
@@ -1258,9 +1267,11 @@ impl Renderer {
     /// `penetration_fields`; an empty field for `None`).
     fn read_frames(
         &self,
+        what: &str,
+        mut encoder: wgpu::CommandEncoder,
         rows: &[(u64, u64)],
         fields: &[Option<(u64, u64)>],
-    ) -> Result<(Vec<FrameParts>, Vec<Vec<f32>>)> {
+    ) -> Result<ReadFrames> {
         enum Part {
             Rgba(Vec<u8>),
             Indentation(Vec<f32>),
@@ -1284,7 +1295,26 @@ impl Renderer {
         }
         let frame_ranges = 3 * rows.len();
         let pixels = self.sensor.width as usize * self.sensor.height as usize;
-        let parts = read_ranges_with(self.ctx, Some(&self.staging), &ranges, |k, bytes| {
+        // The copies ride in the submission of the work they read: one round trip. (The
+        // kept staging buffer holds a full batch; a scene of very many contacts may need
+        // more for its fields.)
+        let fresh;
+        let staging = if self.staging.size() >= staging_bytes(&ranges)? {
+            &self.staging
+        } else {
+            fresh = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip readback staging"),
+                size: staging_bytes(&ranges)?,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            &fresh
+        };
+        record_ranges(&mut encoder, staging, &ranges)?;
+        let submission = self.ctx.submit(what, encoder)?;
+        let mut mapped = None;
+        let parts = unpack_ranges(self.ctx, staging, &ranges, submission, |k, bytes| {
+            mapped.get_or_insert_with(Instant::now);
             if k >= frame_ranges {
                 return Part::Field(bytemuck::pod_collect_to_vec(bytes));
             }
@@ -1337,7 +1367,11 @@ impl Renderer {
                 fields.len()
             )));
         }
-        Ok((frames, out_fields))
+        Ok(ReadFrames {
+            frames,
+            fields: out_fields,
+            mapped: mapped.unwrap_or_else(Instant::now),
+        })
     }
 
     /// Renders one contact and returns each stage's time (for the benchmark's breakdown;
@@ -1443,7 +1477,13 @@ impl Renderer {
             }
         }
         let start = Instant::now();
-        self.read_frames(&[self.changed_rows(p.pixel_rect)], &[])?;
+        let encoder = self.ctx.device.create_command_encoder(&Default::default());
+        self.read_frames(
+            "profile readback",
+            encoder,
+            &[self.changed_rows(p.pixel_rect)],
+            &[],
+        )?;
         out.push(("readback", start.elapsed()));
         if let (Some(t), Some(r)) = (p.texel_rect, p.pixel_rect) {
             log::info!("texel rect {}x{}, pixel rect {}x{}", t.w, t.h, r.w, r.h);
@@ -1671,16 +1711,17 @@ impl Renderer {
                 (groups(w, WORKGROUP), groups(h, WORKGROUP)),
             );
         }
-        self.ctx.submit_and_wait("rendering a scene", encoder)?;
-        let rendered = Instant::now();
-        timings.render = rendered - render_start;
         let field_ranges: Vec<Option<(u64, u64)>> = prepared
             .iter()
             .zip(&field_offsets)
             .map(|(p, &at)| p.field_range(at, self.grid.texels))
             .collect();
-        let (parts, fields) = self.read_frames(&[self.changed_rows(pixel_span)], &field_ranges)?;
-        let Some(part) = parts.into_iter().next() else {
+        let rows = [self.changed_rows(pixel_span)];
+        let read = self.read_frames("rendering a scene", encoder, &rows, &field_ranges)?;
+        let rendered = read.mapped;
+        timings.render = rendered - render_start;
+        let fields = read.fields;
+        let Some(part) = read.frames.into_iter().next() else {
             return Err(GeltipError::Gpu("read back no scene frame".to_string()));
         };
         let c = part.counters;
