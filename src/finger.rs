@@ -97,10 +97,31 @@ impl Finger {
 
     /// The surface point at arc length `s` (>= 0) from the tip and azimuth `phi`.
     pub fn point_at(&self, coord: SurfaceCoord) -> SurfacePoint {
-        let (r, d) = (self.radius, self.cylinder_length);
         let (sin_phi, cos_phi) = coord.phi.sin_cos();
-        if coord.s <= self.junction_s() {
-            let beta = coord.s / r;
+        self.point_towards(coord.s, cos_phi, sin_phi)
+    }
+
+    /// The surface point at `disc`, a position on the unrolled disc (arc length from the tip
+    /// as its length, azimuth as its angle): `point_at(SurfaceCoord::from_disc(disc))`
+    /// without the azimuth's atan2, sine and cosine (its cosine and sine are the position's
+    /// direction), as the shaders' `surface_at_disc` does. For the scans that visit
+    /// thousands of disc positions a contact.
+    pub fn point_at_disc(&self, disc: DVec2) -> SurfacePoint {
+        let s = disc.length();
+        if s > 0.0 {
+            self.point_towards(s, disc.x / s, disc.y / s)
+        } else {
+            // atan2(0, 0) = 0: the azimuth from_disc gives the tip.
+            self.point_towards(0.0, 1.0, 0.0)
+        }
+    }
+
+    /// The surface point at arc length `s` along the meridian of azimuth phi, given as its
+    /// cosine and sine.
+    fn point_towards(&self, s: f64, cos_phi: f64, sin_phi: f64) -> SurfacePoint {
+        let (r, d) = (self.radius, self.cylinder_length);
+        if s <= self.junction_s() {
+            let beta = s / r;
             let (sin_b, cos_b) = beta.sin_cos();
             let normal = DVec3::new(sin_b * cos_phi, sin_b * sin_phi, cos_b);
             SurfacePoint {
@@ -109,7 +130,7 @@ impl Finger {
                 region: Region::Hemisphere,
             }
         } else {
-            let z = d - (coord.s - self.junction_s());
+            let z = d - (s - self.junction_s());
             SurfacePoint {
                 point: DVec3::new(r * cos_phi, r * sin_phi, z),
                 normal: DVec3::new(cos_phi, sin_phi, 0.0),
@@ -214,6 +235,30 @@ mod tests {
             cylinder_length: 20.0,
             shell_thickness: 1.5,
         }
+    }
+
+    #[test]
+    fn a_disc_position_gives_the_point_of_its_coordinates() {
+        let f = finger();
+        let mut checked = 0;
+        for i in -40..=40 {
+            for j in -40..=40 {
+                let disc =
+                    DVec2::new(i as f64, j as f64) * 0.77 + DVec2::new(1e-3, 0.0) * (i % 3) as f64;
+                let a = f.point_at_disc(disc);
+                let b = f.point_at(SurfaceCoord::from_disc(disc));
+                assert!((a.point - b.point).length() < 1e-12, "{disc}");
+                assert!((a.normal - b.normal).length() < 1e-12, "{disc}");
+                assert_eq!(a.region, b.region, "{disc}");
+                checked += 1;
+            }
+        }
+        let tip = f.point_at_disc(DVec2::ZERO);
+        assert_eq!(
+            tip.point,
+            f.point_at(SurfaceCoord { s: 0.0, phi: 0.0 }).point
+        );
+        assert!(checked > 6000);
     }
 
     #[test]

@@ -259,10 +259,9 @@ fn flat_disc_indents_its_first_touch_line_by_the_depth() {
     for dz in [-4.0, -2.0, 0.0, 2.0, 4.0] {
         let coord = f.coord_of(pose.point + DVec3::new(0.0, 0.0, dz));
         let pen = contact::penetration(
-            f,
             &pose,
             &p.object,
-            coord,
+            &f.point_at(coord),
             pose.trace_depth_mm,
             0.0,
             contact::TRACE_EPSILON_MM,
@@ -271,7 +270,14 @@ fn flat_disc_indents_its_first_touch_line_by_the_depth() {
     }
     // Across the line the cylinder falls away: less indentation 3 mm to the side.
     let side = f.coord_of(pose.point + 3.0 * DVec3::new(-phi.sin(), phi.cos(), 0.0));
-    let pen = contact::penetration(f, &pose, &p.object, side, pose.trace_depth_mm, 0.0, 1e-3);
+    let pen = contact::penetration(
+        &pose,
+        &p.object,
+        &f.point_at(side),
+        pose.trace_depth_mm,
+        0.0,
+        1e-3,
+    );
     assert!(pen < depth - 0.2, "{pen}");
     let (_, truth) = render_one(&mut paper(), &p);
     assert!((truth.indentation_reached_mm - depth).abs() < 0.01);
@@ -574,22 +580,20 @@ fn may_touch_covers_every_pressed_point_of_its_block() {
             for bi in -6..=6 {
                 let block = centre + glam::DVec2::new(bi as f64, bj as f64) * 2.2;
                 let touched = contact::may_touch(
-                    f,
                     &pose,
                     &p.object,
-                    geltip::SurfaceCoord::from_disc(block),
+                    &f.point_at_disc(block),
                     depth,
                     drape,
                     tolerance,
                 );
                 for k in 0..25 {
                     let offset = glam::DVec2::new((k % 5) as f64 - 2.0, (k / 5) as f64 - 2.0) * 0.5;
-                    let at = geltip::SurfaceCoord::from_disc(block + offset);
+                    let at = f.point_at(geltip::SurfaceCoord::from_disc(block + offset));
                     let pressed = contact::penetration(
-                        f,
                         &pose,
                         &p.object,
-                        at,
+                        &at,
                         depth,
                         drape,
                         contact::TRACE_EPSILON_MM,

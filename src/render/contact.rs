@@ -6,7 +6,7 @@
 //! deep end (lambda = L) outwards, so the first object point met is the deepest.
 
 use super::{ContactPose, HeightfieldGrid, Rect};
-use crate::finger::{Finger, SurfaceCoord};
+use crate::finger::{Finger, SurfaceCoord, SurfacePoint};
 use crate::object::Object;
 use crate::sensor::Sensor;
 use glam::{DVec2, DVec3};
@@ -24,27 +24,26 @@ pub fn max_trace_depth(finger: &Finger, depth_mm: f64) -> f64 {
     (2.0 * depth_mm).min(finger.shell_thickness) + 0.5
 }
 
-/// Inward displacement (mm) of the skin at `coord` where the object presses it, traced from
+/// Inward displacement (mm) of the skin at surface point `at` where the object presses it,
+/// traced from
 /// `max_depth` inwards. The skin cannot bend tighter than `drape` mm, so it is the object
 /// grown by `drape` (its SDF minus `drape`) that is traced, less `drape`: under the object the
 /// skin follows it, past an edge it falls away on a circle of that radius instead of a cliff
 /// (computed from the SDF itself, so no grid can turn the edge into a staircase).
 /// `hit_tolerance` > TRACE_EPSILON_MM makes it conservative (used by the footprint scan).
 pub fn penetration(
-    finger: &Finger,
     pose: &ContactPose,
     object: &Object,
-    coord: SurfaceCoord,
+    at: &SurfacePoint,
     max_depth: f64,
     drape: f64,
     hit_tolerance: f64,
 ) -> f64 {
     // A hit at lambda <= drape is no press, as is a trace that stops there.
     match trace_inward(
-        finger,
         pose,
         object,
-        coord,
+        at,
         max_depth + drape,
         drape,
         hit_tolerance,
@@ -55,26 +54,24 @@ pub fn penetration(
     }
 }
 
-/// Whether the object grown by `drape + tolerance` reaches the inward normal at `coord`
+/// Whether the object grown by `drape + tolerance` reaches the inward normal at `at`
 /// deeper than `drape` (within `max_depth + drape`): true for every coord within
 /// `tolerance` of a point [`penetration`] finds pressed. Sphere tracing by the grown SDF,
 /// so that no region within the tolerance is stepped over; a trace that runs out of steps
 /// counts as touching (this only prunes work).
 pub fn may_touch(
-    finger: &Finger,
     pose: &ContactPose,
     object: &Object,
-    coord: SurfaceCoord,
+    at: &SurfacePoint,
     max_depth: f64,
     drape: f64,
     tolerance: f64,
 ) -> bool {
     let start = max_depth + drape;
     match trace_inward(
-        finger,
         pose,
         object,
-        coord,
+        at,
         start,
         drape + tolerance,
         TRACE_EPSILON_MM,
@@ -97,20 +94,18 @@ enum Trace {
 }
 
 /// Sphere-traces the object grown by `grow` (its SDF minus `grow`) along the inward normal
-/// at `coord`, from `start` inwards: a hit where the grown SDF falls to `hit`, a miss once
+/// at `sp`, from `start` inwards: a hit where the grown SDF falls to `hit`, a miss once
 /// the trace reaches `floor`. Shared by [`penetration`] and [`may_touch`].
 #[allow(clippy::too_many_arguments)]
 fn trace_inward(
-    finger: &Finger,
     pose: &ContactPose,
     object: &Object,
-    coord: SurfaceCoord,
+    sp: &SurfacePoint,
     start: f64,
     grow: f64,
     hit: f64,
     floor: f64,
 ) -> Trace {
-    let sp = finger.point_at(coord);
     let mut lambda = start;
     for _ in 0..MAX_TRACE_STEPS {
         let d = object.sdf(pose.to_object(sp.point - lambda * sp.normal)) - grow;
@@ -258,11 +253,11 @@ pub fn footprint(
                 if s < s_lo - block_tolerance || s > s_hi + block_tolerance {
                     continue;
                 }
-                let coord = SurfaceCoord::from_disc(c);
-                if (f.point_at(coord).point - pose.origin).length() > block_reach {
+                let at = f.point_at_disc(c);
+                if (at.point - pose.origin).length() > block_reach {
                     continue;
                 }
-                *mark = may_touch(f, pose, object, coord, max_depth, drape, block_tolerance);
+                *mark = may_touch(pose, object, &at, max_depth, drape, block_tolerance);
             }
         });
     // Rows of cells in parallel: the GPU waits for this (prepare is on the frame's path).
@@ -280,11 +275,11 @@ pub fn footprint(
                 if s < s_lo || s > s_hi {
                     continue;
                 }
-                let coord = SurfaceCoord::from_disc(centre(ci, cj));
-                if (f.point_at(coord).point - pose.origin).length() > reach {
+                let at = f.point_at_disc(centre(ci, cj));
+                if (at.point - pose.origin).length() > reach {
                     continue;
                 }
-                *mark = penetration(f, pose, object, coord, max_depth, drape, tolerance) > 0.0;
+                *mark = penetration(pose, object, &at, max_depth, drape, tolerance) > 0.0;
             }
         });
     let is_marked = |ci: i64, cj: i64| {
@@ -424,10 +419,11 @@ pub fn penetration_field(
     for j in rect.y..rect.y + rect.h {
         for i in rect.x..rect.x + rect.w {
             // One sample per texel is enough: the drape makes the skin continuous at edges.
-            let coord = SurfaceCoord::from_disc(grid.texel_centre(i, j));
-            if coord.s <= grid.half_size_mm {
+            let disc = grid.texel_centre(i, j);
+            if disc.length() <= grid.half_size_mm {
+                let at = f.point_at_disc(disc);
                 field[j as usize * n + i as usize] =
-                    penetration(f, pose, object, coord, max_depth, drape, TRACE_EPSILON_MM) as f32;
+                    penetration(pose, object, &at, max_depth, drape, TRACE_EPSILON_MM) as f32;
             }
         }
     }
@@ -612,7 +608,7 @@ pub fn first_touch(
             if s < s_lo - cell_radius || s > s_hi + cell_radius {
                 continue;
             }
-            let sp = finger.point_at(SurfaceCoord::from_disc(disc));
+            let sp = finger.point_at_disc(disc);
             if !near_path(sp.point, cell_radius) {
                 continue;
             }
@@ -658,15 +654,14 @@ pub fn first_touch(
                 if s < s_lo || s > s_hi {
                     continue;
                 }
-                let coord = SurfaceCoord::from_disc(disc);
-                let sp = finger.point_at(coord);
+                let sp = finger.point_at_disc(disc);
                 if !near_path(sp.point, 0.0) {
                     continue;
                 }
                 let rel = sp.point - origin;
                 if let Some(t) = touching_offset(object, object_from_world, rel, b_obj, t_hi, floor)
                 {
-                    samples.push((coord, t));
+                    samples.push((SurfaceCoord::from_disc(disc), t));
                     floor = floor.max(t - FIRST_TOUCH_BAND_MM);
                 }
             }

@@ -1578,10 +1578,9 @@ fn ground_truth(
         mask_bbox: None,
         over_pressed: false,
         contact_indentation_mm: contact::penetration(
-            f,
             pose,
             &press.object,
-            pose.coord,
+            &f.point_at(pose.coord),
             pose.trace_depth_mm,
             sensor.config.elastomer.drape_mm,
             contact::TRACE_EPSILON_MM,
