@@ -6,7 +6,8 @@
 //! sensor), one contact per submission, and batches of contacts per submission; each split
 //! into CPU preparation, GPU render (submit + wait, the copies for reading back included) and
 //! readback (unpacking the mapped frames), with the
-//! pixels re-rendered per frame; one and two non-overlapping contacts per frame
+//! pixels re-rendered per frame; two renderers on devices of their own, one contact per
+//! submit each on its own thread (fps over both); one and two non-overlapping contacts per frame
 //! (`render_scene`); and the CPU alternative (the CPU mirrors over the same footprint,
 //! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps.
@@ -178,6 +179,36 @@ fn main() -> anyhow::Result<()> {
         Ok(t)
     })?;
     row("one contact per submit", &mut single);
+
+    // What a program that renders many contacts can do on the same cores: two renderers on
+    // devices of their own (GpuContext::stream, as `geltip dataset --streams` does), each
+    // rendering half the contacts one per submit on its own thread; fps over both. Its
+    // split is summed over the two.
+    let mut second = Renderer::on(&sensor, geltip::gpu::GpuContext::stream(1)?)?;
+    second.ready_objects(&solids)?;
+    let mut two_streams = passes(repeat, frames, || {
+        let (a, b) = list.split_at(list.len() / 2);
+        let run = |renderer: &mut Renderer, part: &[Contact]| -> anyhow::Result<Timings> {
+            let mut t = Timings::default();
+            for c in part {
+                renderer.render(c)?;
+                add(&mut t, renderer.timings());
+            }
+            Ok(t)
+        };
+        let (ta, tb) = std::thread::scope(|scope| {
+            let other = scope.spawn(|| run(&mut second, b));
+            let mine = run(&mut r, a);
+            (mine, other.join())
+        });
+        let mut t = ta?;
+        add(
+            &mut t,
+            tb.map_err(|_| anyhow::anyhow!("the second stream panicked"))??,
+        );
+        Ok(t)
+    })?;
+    row("one per submit, 2 streams", &mut two_streams);
 
     // A streaming consumer: each batch's frames are dropped before the next (keeping all of
     // them would time the allocator's fresh pages, not the renderer).

@@ -18,6 +18,7 @@ use crate::gpu::shaders::create_compute_pipeline_with;
 use crate::gpu::GpuContext;
 use crate::object::Object;
 use crate::sensor::Sensor;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -1613,10 +1614,16 @@ impl Renderer {
         self.seed_counter = self.seed_counter.wrapping_add(1);
         let seed =
             self.sensor.config.render.noise_seed ^ self.seed_counter.wrapping_mul(0x9E37_79B9);
+        // The contacts side by side on rayon's threads (each scan inside is parallel too,
+        // but a contact's own serial steps, such as its first-touch refinement, are not).
+        let (sensor, grid) = (&self.sensor, &self.grid);
         let prepared: Vec<Prepared> = presses
-            .iter()
-            .map(|p| self.prepare(p, seed))
+            .par_iter()
+            .map(|p| prepare_contact(sensor, grid, p, seed))
             .collect::<Result<_>>()?;
+        for p in &prepared {
+            self.ready_object(p)?;
+        }
         let (field_offsets, field_bytes) = self.field_offsets(&prepared);
         self.reserve_fields(field_bytes);
         let texel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.texel_rect));
