@@ -1321,15 +1321,24 @@ impl Renderer {
             }
             let start = rows[k / 3].0 as usize;
             match k % 3 {
+                // Each byte written once: the reference (or zero) around the rows read.
                 0 => {
-                    let mut rgba = self.reference.rgba.clone();
-                    rgba[start * 4..start * 4 + bytes.len()].copy_from_slice(bytes);
+                    let reference = &self.reference.rgba;
+                    let mut rgba = Vec::with_capacity(reference.len());
+                    rgba.extend_from_slice(&reference[..start * 4]);
+                    rgba.extend_from_slice(bytes);
+                    rgba.extend_from_slice(&reference[start * 4 + bytes.len()..]);
                     Part::Rgba(rgba)
                 }
                 1 => {
-                    let mut indentation = vec![0.0f32; pixels];
-                    let read = &mut indentation[start..start + bytes.len() / 4];
-                    bytemuck::cast_slice_mut::<f32, u8>(read).copy_from_slice(bytes);
+                    let mut indentation = Vec::with_capacity(pixels);
+                    indentation.resize(start, 0.0f32);
+                    indentation.extend(
+                        bytes
+                            .chunks_exact(4)
+                            .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]])),
+                    );
+                    indentation.resize(pixels, 0.0);
                     Part::Indentation(indentation)
                 }
                 _ => Part::Counters(bytemuck::pod_collect_to_vec(bytes)),
