@@ -543,6 +543,48 @@ fn a_frame_does_not_depend_on_the_frames_before_it() {
 }
 
 #[test]
+fn renderers_on_their_own_devices_render_the_same_frames_at_once() {
+    // `geltip dataset --streams` renders batches on several devices at the same time and
+    // promises the files do not depend on which stream rendered a sample: a second
+    // device's frames, rendered while the shared device renders, equal the shared one's.
+    use geltip::gpu::context::MAX_STREAMS;
+    use geltip::gpu::GpuContext;
+    let contacts = [
+        contact(Solid::Sphere, Place::Rotation(45.0), 1.0),
+        contact(Solid::Edge, Place::Rotation(62.0), 0.8),
+    ];
+    let mut shared = paper();
+    let sensor = shared.sensor().clone();
+    let second = GpuContext::stream(1).unwrap();
+    assert!(!std::ptr::eq(second, GpuContext::shared().unwrap()));
+    assert!(std::ptr::eq(second, GpuContext::stream(1).unwrap()));
+    assert!(std::ptr::eq(
+        GpuContext::stream(0).unwrap(),
+        GpuContext::shared().unwrap()
+    ));
+    let e = GpuContext::stream(MAX_STREAMS).unwrap_err().to_string();
+    assert!(e.contains("render streams") && e.contains("at most"), "{e}");
+    let mut other = Renderer::on(&sensor, second).unwrap();
+    let (mine, theirs) = std::thread::scope(|scope| {
+        let theirs = scope.spawn(|| other.render_batch(&contacts).unwrap());
+        (
+            shared.render_batch(&contacts).unwrap(),
+            theirs.join().unwrap(),
+        )
+    });
+    for ((a, ta), (b, tb)) in mine.iter().zip(&theirs) {
+        assert!(a.rgba == b.rgba, "the two devices' images differ");
+        assert_eq!(a.indentation, b.indentation);
+        assert_eq!(ta.to_json(), tb.to_json());
+    }
+    assert_ne!(
+        mine[0].0.rgba,
+        shared.reference().rgba,
+        "no contact rendered"
+    );
+}
+
+#[test]
 fn profiling_a_frame_times_every_stage_and_leaves_the_renderer_as_rendering_does() {
     // The profiler records the same stages as a frame (in one submission with timestamps
     // where the device has them): every stage named once, the GPU's share positive, and the
