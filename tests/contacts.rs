@@ -256,26 +256,21 @@ fn flat_disc_indents_its_first_touch_line_by_the_depth() {
     let span =
         zs.iter().cloned().fold(f64::MIN, f64::max) - zs.iter().cloned().fold(f64::MAX, f64::min);
     assert!(span > 6.0, "first-touch line {span} mm long");
+    // The indentation at the surface point nearest `q`, traced to `tolerance`.
+    let pen_near = |q: DVec3, tolerance: f64| {
+        let at = f.point_at(f.coord_of(q));
+        contact::penetration(&pose, &p.object, &at, pose.trace_depth_mm, 0.0, tolerance)
+    };
     for dz in [-4.0, -2.0, 0.0, 2.0, 4.0] {
-        let coord = f.coord_of(pose.point + DVec3::new(0.0, 0.0, dz));
-        let pen = contact::penetration(
-            &pose,
-            &p.object,
-            &f.point_at(coord),
-            pose.trace_depth_mm,
-            0.0,
+        let pen = pen_near(
+            pose.point + DVec3::new(0.0, 0.0, dz),
             contact::TRACE_EPSILON_MM,
         );
         assert!((pen - depth).abs() < 2e-3, "at dz {dz}: {pen}");
     }
     // Across the line the cylinder falls away: less indentation 3 mm to the side.
-    let side = f.coord_of(pose.point + 3.0 * DVec3::new(-phi.sin(), phi.cos(), 0.0));
-    let pen = contact::penetration(
-        &pose,
-        &p.object,
-        &f.point_at(side),
-        pose.trace_depth_mm,
-        0.0,
+    let pen = pen_near(
+        pose.point + 3.0 * DVec3::new(-phi.sin(), phi.cos(), 0.0),
         1e-3,
     );
     assert!(pen < depth - 0.2, "{pen}");
