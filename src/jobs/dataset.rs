@@ -294,7 +294,6 @@ pub fn default_depth_range(shell_mm: f64) -> (f64, f64) {
     (0.2_f64.min(shell_mm), shell_mm)
 }
 
-/// Encoder threads by default: the cores this process may use.
 /// Render streams by default: three. A software rasteriser leaves cores idle within and
 /// between one stream's dispatches (and while it records, submits and reads back), which
 /// other streams fill: on 2-core lavapipe 1, 2, 3 and 4 streams gave about 100, 115, 130
@@ -303,6 +302,7 @@ pub fn default_streams() -> usize {
     3
 }
 
+/// Encoder threads by default: the cores this process may use.
 pub fn default_workers() -> usize {
     std::thread::available_parallelism().map_or(2, |n| n.get())
 }

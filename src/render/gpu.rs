@@ -1262,8 +1262,9 @@ impl Renderer {
         pixel_rect.map_or((0, 0), |r| ((r.y * w) as u64, (r.h * w) as u64))
     }
 
-    /// One round trip for frames `0..rows.len()` of a batch: per frame, its image and its
-    /// indentation (read over `rows`; the reference's image and zero elsewhere), and its
+    /// Submits `encoder` (the work that renders frames `0..rows.len()` of a batch) with the
+    /// copies that read them back appended, waits once and unpacks: per frame, its image and
+    /// its indentation (read over `rows`; the reference's image and zero elsewhere), and its
     /// counters; then the contacts' penetration fields over `fields` (byte ranges of
     /// `penetration_fields`; an empty field for `None`).
     fn read_frames(
