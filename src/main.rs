@@ -204,7 +204,7 @@ enum Command {
         /// Encoder threads (default: the cores available).
         #[arg(long)]
         jobs: Option<usize>,
-        /// Render streams, each a renderer on a device of its own (default 2; 1..=4).
+        /// Render streams, each a renderer on a device of its own (default 3; 1..=4).
         #[arg(long)]
         streams: Option<usize>,
         /// Join shard directories into OUT: --merge OUT SHARD_DIR...

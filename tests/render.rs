@@ -543,6 +543,26 @@ fn a_frame_does_not_depend_on_the_frames_before_it() {
 }
 
 #[test]
+fn a_refused_scene_leaves_the_next_frame_as_from_a_fresh_renderer() {
+    // After a failed frame the renderer clears its whole heightfield at the next one (what
+    // a failed submission left there is unknown): that frame still comes out exactly.
+    let small = contact(Solid::Cone, Place::Rotation(62.0), 0.3);
+    let mut r = paper();
+    r.render(&contact(Solid::Slab, Place::Rotation(60.0), 1.5))
+        .unwrap();
+    let refused = render::Press::from(&contact(Solid::Sphere, Place::Rotation(45.0), -1.0));
+    let e = r.render_scene(&[refused]).unwrap_err().to_string();
+    assert!(e.contains("--depth"), "{e}");
+    let (after, _) = r.render(&small).unwrap();
+    let (alone, _) = Renderer::new(r.sensor()).unwrap().render(&small).unwrap();
+    assert!(
+        after.rgba == alone.rgba,
+        "the frame after a refused scene differs"
+    );
+    assert_eq!(after.indentation, alone.indentation);
+}
+
+#[test]
 fn renderers_on_their_own_devices_render_the_same_frames_at_once() {
     // `geltip dataset --streams` renders batches on several devices at the same time and
     // promises the files do not depend on which stream rendered a sample: a second

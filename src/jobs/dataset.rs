@@ -453,14 +453,16 @@ impl Look {
     }
 }
 
-/// Seconds spent in each part of a run (encoding and writing summed over the workers).
+/// Seconds spent in each part of a run (rendering summed over the streams, encoding and
+/// writing over the workers).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Split {
     /// Drawing contacts and the renderer's CPU preparation.
     pub prepare: Duration,
-    /// GPU render (submit and wait).
+    /// GPU render: recording, submitting and waiting until the frames are mapped (summed
+    /// over the render streams, which run at once: it can exceed the wall time).
     pub render: Duration,
-    /// Reading frames back to the CPU.
+    /// Unpacking the frames on the CPU (summed over the render streams).
     pub readback: Duration,
     /// Post-process (background, jitter, noise), labels.
     pub post: Duration,
@@ -934,9 +936,28 @@ fn render_samples(
                 }
             }
         });
+        // Whichever way a stream ends (a panic included), it counts itself out; the last
+        // one closes the channel, so the preparing thread cannot block on a full channel.
+        struct Leaving<'a, T> {
+            live: &'a AtomicU64,
+            prepared_rx: &'a Mutex<Option<T>>,
+        }
+        impl<T> Drop for Leaving<'_, T> {
+            fn drop(&mut self) {
+                if self.live.fetch_sub(1, Ordering::Relaxed) == 1 {
+                    if let Ok(mut rx) = self.prepared_rx.lock() {
+                        rx.take();
+                    }
+                }
+            }
+        }
         let stream = |renderer: &mut Renderer,
                       tx: mpsc::SyncSender<Job>,
                       progress: &mut dyn FnMut(Progress)| {
+            let _leaving = Leaving {
+                live: &live,
+                prepared_rx: &prepared_rx,
+            };
             let mut split = Split::default();
             let result = (|| -> Result<()> {
                 loop {
@@ -966,11 +987,6 @@ fn render_samples(
             })();
             if let Err(e) = result {
                 shared.fail(e);
-            }
-            if live.fetch_sub(1, Ordering::Relaxed) == 1 {
-                if let Ok(mut rx) = prepared_rx.lock() {
-                    rx.take();
-                }
             }
             split
         };

@@ -282,7 +282,8 @@ fn paeth(a: u8, b: u8, c: u8) -> u8 {
 
 /// One PNG row filtered (filter type byte first) by whichever of Sub, Up, Average and
 /// Paeth has the smallest sum of absolute values as signed bytes (the `png` crate's
-/// adaptive choice); `prev` is the row above (zeros for the first), 3 bytes a pixel. Each
+/// adaptive heuristic; ties go to the first of the four here, to the last there, which
+/// changes no pixel); `prev` is the row above (zeros for the first), 3 bytes a pixel. Each
 /// filter is one pass over zipped slices (no bounds checks) into its own buffer of
 /// `scratch`, which the compiler vectorises.
 fn filter_row(row: &[u8], prev: &[u8], scratch: &mut [Vec<u8>; 4], out: &mut Vec<u8>) {

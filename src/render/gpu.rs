@@ -1126,7 +1126,8 @@ impl Renderer {
             self.ready_object(p)?;
         }
         let mut out = Vec::with_capacity(prepared.len());
-        let Ran { frames, fields } = self.run(&prepared, &mut total)?;
+        let ran = self.run(&prepared, &mut total);
+        let Ran { frames, fields } = self.forget_heightfield_on_error(ran)?;
         let labelled = Instant::now();
         // Only a contact's pixel rect is ever indented: its mask is counted there.
         let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect).collect();
@@ -1617,6 +1618,28 @@ impl Renderer {
     /// press, in order: its mask is the pressed pixels inside its own footprint's pixel
     /// rectangle; `over_pressed` is the frame's (any object against the shell).
     pub fn render_scene(&mut self, presses: &[Press]) -> Result<(Frame, Vec<GroundTruth>)> {
+        let rendered = self.render_scene_once(presses);
+        self.forget_heightfield_on_error(rendered)
+    }
+
+    /// After a failed frame the heightfield's state is unknown (the recorded clears may
+    /// never have run, or run in part): the next frame clears all of it.
+    fn forget_heightfield_on_error<T>(&mut self, result: Result<T>) -> Result<T> {
+        if result.is_err() {
+            let n = self.grid.texels;
+            self.dirty = Some(Rect {
+                x: 0,
+                y: 0,
+                w: n,
+                h: n,
+            });
+        }
+        result
+    }
+
+    /// [`Renderer::render_scene`], leaving the heightfield's bookkeeping to its caller on
+    /// error.
+    fn render_scene_once(&mut self, presses: &[Press]) -> Result<(Frame, Vec<GroundTruth>)> {
         if presses.is_empty() {
             return Err(GeltipError::input("scene", "no contacts to render"));
         }
