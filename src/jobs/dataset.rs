@@ -838,13 +838,29 @@ fn render_samples(
     let mut config = spec.sensor.config.clone();
     config.render.noise = 0.0;
     let render_sensor = Sensor::from_config(spec.sensor.name.clone(), config)?;
-    let mut renderers = Vec::with_capacity(spec.streams);
-    for i in 0..spec.streams {
+    // The streams' renderers start side by side (pipelines compile, the empty finger
+    // renders); every object's contact pipeline is built now, at start-up, not in the first
+    // batch's frames.
+    let start_stream = |i: usize| -> Result<Renderer> {
         let mut renderer = Renderer::on(&render_sensor, GpuContext::stream(i)?)?;
-        // Every object's contact pipeline now: start-up, not the first batch's frames.
         renderer.ready_objects(objects)?;
-        renderers.push(renderer);
-    }
+        Ok(renderer)
+    };
+    let mut renderers: Vec<Renderer> = std::thread::scope(|scope| {
+        let started: Vec<_> = (0..spec.streams)
+            .map(|i| scope.spawn(move || start_stream(i)))
+            .collect();
+        started
+            .into_iter()
+            .map(|s| {
+                s.join().unwrap_or_else(|_| {
+                    Err(GeltipError::Gpu(
+                        "a render stream panicked at start-up".into(),
+                    ))
+                })
+            })
+            .collect::<Result<_>>()
+    })?;
     report.startup = start.elapsed();
     let renderer = &renderers[0];
     let start = Instant::now();
