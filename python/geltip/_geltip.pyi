@@ -73,9 +73,12 @@ class Simulator:
         self,
         sensor: Union[Sensor, _Path, None] = None,
         objects: Optional[Sequence[_Path]] = None,
+        streams: int = 1,
     ) -> None:
         """`objects`: solids or mesh files to load (meshes are baked) now rather than on
-        first use."""
+        first use. `streams` (1..4): renderers on devices of their own that `render_batch`
+        shares its submissions between, at the same time (the same frames, faster on a
+        software rasteriser, which leaves cores idle within one stream)."""
     @property
     def sensor(self) -> Sensor: ...
     @property

@@ -6,6 +6,8 @@
 //! instead of unwinding into the interpreter.
 
 use geltip::finger::Region;
+use geltip::gpu::context::MAX_STREAMS;
+use geltip::gpu::GpuContext;
 use geltip::localise::{Localiser, Method};
 use geltip::object::Object;
 use geltip::render::gpu::{Renderer, MAX_BATCH};
@@ -787,6 +789,9 @@ fn poisoned() -> PyErr {
 struct Simulator {
     sensor: Py<Sensor>,
     renderer: Mutex<Renderer>,
+    /// Renderers of render streams 1.. (`streams=`), each on a device of its own: only
+    /// `render_batch` uses them.
+    more: Vec<Mutex<Renderer>>,
     objects: Objects,
     host: String,
 }
@@ -802,6 +807,77 @@ impl<T> OutPtr<T> {
     unsafe fn slice<'a>(self) -> &'a mut [T] {
         std::slice::from_raw_parts_mut(self.0, self.1)
     }
+}
+
+/// Renders `list` in submissions of [`MAX_BATCH`]: submission c on renderer c mod n, each
+/// renderer on its own thread, in a fixed order (so the same calls give the same frames),
+/// writing frame i into slot i of `images` (RGB) and `depths`; the labels in list order.
+fn render_chunks(
+    renderers: Vec<&mut Renderer>,
+    list: &[Contact],
+    images: &mut [u8],
+    depths: Option<&mut [f32]>,
+    (h, w): (usize, usize),
+) -> geltip::Result<Vec<GroundTruth>> {
+    type Job<'a> = (usize, &'a [Contact], &'a mut [u8], Option<&'a mut [f32]>);
+    // A submission's index and its labels.
+    type Labelled = (usize, Vec<GroundTruth>);
+    let (frame_rgb, frame_px) = (h * w * 3, h * w);
+    let streams = renderers.len().max(1);
+    let mut depth_parts: Vec<Option<&mut [f32]>> = match depths {
+        Some(d) => d.chunks_mut(MAX_BATCH * frame_px).map(Some).collect(),
+        None => Vec::new(),
+    };
+    depth_parts.resize_with(list.len().div_ceil(MAX_BATCH), || None);
+    let mut jobs: Vec<Vec<Job<'_>>> = (0..streams).map(|_| Vec::new()).collect();
+    let parts = list
+        .chunks(MAX_BATCH)
+        .zip(images.chunks_mut(MAX_BATCH * frame_rgb))
+        .zip(depth_parts);
+    for (c, ((contacts, image), depth)) in parts.enumerate() {
+        jobs[c % streams].push((c, contacts, image, depth));
+    }
+    let results: Vec<geltip::Result<Vec<Labelled>>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = renderers
+            .into_iter()
+            .zip(jobs)
+            .map(|(r, jobs)| {
+                scope.spawn(move || {
+                    let mut done = Vec::with_capacity(jobs.len());
+                    for (c, contacts, image, mut depth) in jobs {
+                        let mut truths = Vec::with_capacity(contacts.len());
+                        for (k, (frame, truth)) in r.render_batch(contacts)?.into_iter().enumerate()
+                        {
+                            rgba_to_rgb(
+                                &frame.rgba,
+                                &mut image[k * frame_rgb..(k + 1) * frame_rgb],
+                            );
+                            if let Some(d) = depth.as_deref_mut() {
+                                d[k * frame_px..(k + 1) * frame_px]
+                                    .copy_from_slice(&frame.indentation);
+                            }
+                            truths.push(truth);
+                        }
+                        done.push((c, truths));
+                    }
+                    Ok(done)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err(GeltipError::Gpu("a render stream panicked".into())))
+            })
+            .collect()
+    });
+    let mut chunks = Vec::new();
+    for r in results {
+        chunks.extend(r?);
+    }
+    chunks.sort_by_key(|(c, _)| *c);
+    Ok(chunks.into_iter().flat_map(|(_, t)| t).collect())
 }
 
 impl Simulator {
@@ -831,16 +907,25 @@ fn frame_tuple<'py>(
 
 #[pymethods]
 impl Simulator {
-    /// `Simulator(sensor, objects=[...])`: starts the GPU context (once per process),
-    /// compiles the pipelines and renders the empty finger. `objects` preloads meshes (a
-    /// mesh is baked on first use otherwise).
+    /// `Simulator(sensor, objects=[...], streams=1)`: starts the GPU context (once per
+    /// process), compiles the pipelines and renders the empty finger. `objects` preloads
+    /// meshes (a mesh is baked on first use otherwise). `streams` (1..=4): renderers on
+    /// devices of their own that `render_batch` shares its batches between, at the same time
+    /// (on a software rasteriser they fill the cores one leaves idle).
     #[new]
-    #[pyo3(signature = (sensor = None, objects = None))]
+    #[pyo3(signature = (sensor = None, objects = None, streams = 1))]
     fn new(
         py: Python<'_>,
         sensor: Option<&Bound<'_, PyAny>>,
         objects: Option<Vec<Bound<'_, PyAny>>>,
+        streams: usize,
     ) -> PyResult<Simulator> {
+        if !(1..=MAX_STREAMS).contains(&streams) {
+            return Err(bad(
+                "streams",
+                format!("must lie in 1..={MAX_STREAMS}, got {streams}"),
+            ));
+        }
         let sensor: Py<Sensor> = match sensor {
             None => Py::new(py, Sensor::new(None)?)?,
             Some(s) => match s.cast::<Sensor>() {
@@ -859,11 +944,32 @@ impl Simulator {
                 .insert(name, Arc::new(loaded));
         }
         let rs = sensor.get().inner.clone();
-        let renderer = detached(py, "starting the renderer", move || Renderer::new(&rs))?;
+        // The streams' renderers start side by side.
+        let mut renderers = detached(py, "starting the renderer", move || {
+            std::thread::scope(|scope| {
+                let started: Vec<_> = (0..streams)
+                    .map(|i| {
+                        let rs = &rs;
+                        scope.spawn(move || Renderer::on(rs, GpuContext::stream(i)?))
+                    })
+                    .collect();
+                started
+                    .into_iter()
+                    .map(|s| {
+                        s.join().unwrap_or_else(|_| {
+                            Err(GeltipError::Gpu("a renderer panicked at start-up".into()))
+                        })
+                    })
+                    .collect::<geltip::Result<Vec<Renderer>>>()
+            })
+        })?;
+        let more = renderers.split_off(1).into_iter().map(Mutex::new).collect();
+        let renderer = renderers.remove(0);
         let host = geltip::gpu::host_description(renderer.adapter());
         Ok(Simulator {
             sensor,
             renderer: Mutex::new(renderer),
+            more,
             objects: store,
             host,
         })
@@ -1092,29 +1198,19 @@ impl Simulator {
                 }
                 None => None,
             };
-            let mut guard = self.lock()?;
-            let r: &mut Renderer = &mut guard;
+            // Every stream's renderer, always in the same order (no lock-order deadlock).
+            let mut guards = vec![self.lock()?];
+            for m in &self.more {
+                guards.push(m.lock().map_err(|_| poisoned())?);
+            }
+            let renderers: Vec<&mut Renderer> = guards.iter_mut().map(|g| &mut **g).collect();
             let truths = detached(py, "rendering a batch", move || {
                 // SAFETY: see `OutPtr`; the lengths are the arrays' own.
                 let images = unsafe { image_ptr.slice() };
-                let mut depths = depth_ptr.map(|d| unsafe { d.slice() });
-                let mut truths: Vec<GroundTruth> = Vec::with_capacity(n);
-                let frame_rgb = h * w * 3;
-                let frame_px = h * w;
-                for (c, chunk) in list.chunks(MAX_BATCH).enumerate() {
-                    let first = c * MAX_BATCH;
-                    for (k, (frame, truth)) in r.render_batch(chunk)?.into_iter().enumerate() {
-                        let i = first + k;
-                        rgba_to_rgb(&frame.rgba, &mut images[i * frame_rgb..(i + 1) * frame_rgb]);
-                        if let Some(d) = depths.as_deref_mut() {
-                            d[i * frame_px..(i + 1) * frame_px].copy_from_slice(&frame.indentation);
-                        }
-                        truths.push(truth);
-                    }
-                }
-                Ok(truths)
+                let depths = depth_ptr.map(|d| unsafe { d.slice() });
+                render_chunks(renderers, &list, images, depths, (h, w))
             });
-            drop(guard);
+            drop(guards);
             drop(depth_rw);
             drop(image_rw);
             truths?

@@ -96,6 +96,26 @@ def test_batch_equals_single_renders(sim):
     assert len({images[k].tobytes() for k in range(len(contacts))}) == len(contacts)
 
 
+def test_streams_share_a_batch_and_render_the_same_frames(sim):
+    # Three renderers on devices of their own split the submissions between them, at the
+    # same time: the frames, depth maps and labels are those of one renderer, in order.
+    contacts = batch_contacts() * 4
+    assert len(contacts) > 3 * geltip.MAX_BATCH  # a stream gets two submissions
+    three = geltip.Simulator("paper", streams=3)
+    images, labels, depths = three.render_batch(contacts)
+    want, want_labels, want_depths = sim.render_batch(contacts)
+    np.testing.assert_array_equal(images, want)
+    np.testing.assert_array_equal(depths, want_depths)
+    assert labels == want_labels
+    n = len(batch_contacts())
+    assert len({images[k].tobytes() for k in range(n)}) == n
+    single = three.render(**contacts[3])
+    np.testing.assert_array_equal(single[0], want[3])
+    for bad in (0, 5):
+        with pytest.raises(ValueError, match="streams"):
+            geltip.Simulator("paper", streams=bad)
+
+
 def test_batch_into_given_arrays(sim):
     contacts = batch_contacts()[:3]
     out = np.zeros((3, 480, 640, 3), np.uint8)
