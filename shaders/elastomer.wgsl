@@ -63,7 +63,12 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     let idx = j * sensor.texels + i;
     let here = texel_centre(i, j);
     let rho = parallel_radius(length(here));
-    var v = elastomer_scratch[idx].xy;
+    // This texel's penetration and meridian blends from the maps, which hold their buffers'
+    // values over the texel rect (copied after each stage): llvmpipe fetches a texel for all
+    // lanes at once, where a storage buffer load at a per-lane index is a loop over lanes.
+    let texel = vec2<u32>(i, j);
+    let pen = textureLoad(penetration_map, texel, 0).x;
+    var v = textureLoad(elastomer_map, texel, 0).xy;
     if rho > 1e-6 {
         let n_step = sensor.narrow_step_mm;
         let n_turn = vec2<f32>(cos(n_step / rho), sin(n_step / rho));
@@ -84,10 +89,10 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
         v = vec2<f32>(narrow, wide);
     }
     let t = sensor.shell_thickness;
-    if penetration[idx] > t {
+    if pen > t {
         atomicAdd(&counters[OVER_PRESSED], 1u);
     }
-    let pressed = max(penetration[idx], v.x);
+    let pressed = max(pen, v.x);
     var h = clamp(pressed - sensor.bulge * max(v.y - v.x, 0.0), -0.5 * t, t);
     // Mirror: HEIGHT_EPSILON_MM. Gaussian tails are not a deformation; the camera marches
     // only where there is one.
