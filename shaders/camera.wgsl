@@ -50,9 +50,10 @@ fn probes_depth(p: Probes) -> f32 {
 // Mirror: src/render/camera.rs SHALLOW_MM.
 const SHALLOW_MM: f32 = 0.02;
 
-fn skin_at(u: vec2<f32>) -> vec3<f32> {
+// The skin over disc position u moved in by h.
+fn skin_with(u: vec2<f32>, h: f32) -> vec3<f32> {
     let at = surface_at_disc(u);
-    return at.point - height_at_disc(u) * at.normal;
+    return at.point - h * at.normal;
 }
 
 // Per texel of the contact's rect: the deformed skin's normal minus the undeformed one, by
@@ -72,7 +73,23 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
         let n0 = surface_at_disc(u).normal;
         let ex = vec2<f32>(sensor.texel_mm, 0.0);
         let ey = vec2<f32>(0.0, sensor.texel_mm);
-        var n = cross(skin_at(u + ex) - skin_at(u - ex), skin_at(u + ey) - skin_at(u - ey));
+        // The four neighbours' heights are texel values (a bilinear sample at a texel's
+        // centre is the texel): two gathers of the 2x2 blocks from (i-1, j) and (i, j-1)
+        // hold them all, in textureGather's order (x, y+1), (x+1, y+1), (x+1, y), (x, y);
+        // zero outside the grid, as the bilinear samples were.
+        let texels = f32(sensor.texels);
+        let fi = f32(i);
+        let fj = f32(j);
+        let a = textureGather(0, height_map, map_sampler, vec2<f32>(fi, fj + 1.0) / texels);
+        let b = textureGather(0, height_map, map_sampler, vec2<f32>(fi + 1.0, fj) / texels);
+        let h_left = select(0.0, a.w, fi >= 1.0);
+        let h_up = select(0.0, a.y, fj + 1.0 < texels);
+        let h_right = select(0.0, b.y, fi + 1.0 < texels);
+        let h_down = select(0.0, b.w, fj >= 1.0);
+        var n = cross(
+            skin_with(u + ex, h_right) - skin_with(u - ex, h_left),
+            skin_with(u + ey, h_up) - skin_with(u - ey, h_down),
+        );
         let len = length(n);
         if len > 0.0 {
             n = n / len;
