@@ -25,12 +25,21 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
         dir = u / length(u);
     }
     var narrow = 0.0;
+    var wide = 0.0;
     for (var k = -NARROW_TAPS; k <= NARROW_TAPS; k++) {
         let x = f32(k) * sensor.narrow_step_mm;
-        narrow += sensor.blend_weights[abs(k)].x * sample_penetration(texel_of(u + x * dir));
+        let p = sample_penetration(texel_of(u + x * dir));
+        narrow += sensor.blend_weights[abs(k)].x * p;
+        // Nested kernels: wide tap k / 2 is this place (the loops have constant bounds, so
+        // the driver unrolls them and these conditions fold away).
+        if WIDE_TAPS_NESTED && k % 2 == 0 && abs(k / 2) <= WIDE_TAPS {
+            wide += sensor.blend_weights[abs(k / 2)].y * p;
+        }
     }
-    var wide = 0.0;
     for (var k = -WIDE_TAPS; k <= WIDE_TAPS; k++) {
+        if WIDE_TAPS_NESTED && abs(2 * k) <= NARROW_TAPS {
+            continue;
+        }
         let x = f32(k) * sensor.wide_step_mm;
         wide += sensor.blend_weights[abs(k)].y * sample_penetration(texel_of(u + x * dir));
     }

@@ -229,7 +229,22 @@ fn gpu_matches_the_cpu_pipeline() {
     let mut c = small_sensor().config.clone();
     c.render.ray_steps = 7;
     c.render.blend_tap_spacing = 0.5;
-    gpu_matches_cpu(&Sensor::from_config("small-fine", c).unwrap());
+    gpu_matches_cpu(&Sensor::from_config("small-fine", c.clone()).unwrap());
+    // Taps a texel apart for both kernels: the wide taps no longer lie on every other
+    // narrow one, and the meridians pass samples each kernel's own (WIDE_TAPS_NESTED off).
+    c.render.blend_tap_spacing = 0.25;
+    let apart = Sensor::from_config("small-apart", c).unwrap();
+    let nested = |s: &Sensor| {
+        let grid = render::HeightfieldGrid::for_sensor(s);
+        render::uniforms::SensorUniform::new(s, &grid)
+            .pipeline_constants()
+            .iter()
+            .find(|(name, _)| *name == "WIDE_TAPS_NESTED")
+            .map(|&(_, v)| v)
+    };
+    assert_eq!(nested(&small_sensor()), Some(1.0));
+    assert_eq!(nested(&apart), Some(0.0));
+    gpu_matches_cpu(&apart);
 }
 
 fn gpu_matches_cpu(sensor: &Sensor) {

@@ -88,6 +88,9 @@ override LENS_MODEL: u32 = 1u;
 override RAY_STEPS: u32 = 4u;
 override NARROW_TAPS: i32 = 3;
 override WIDE_TAPS: i32 = 3;
+// Whether the wide kernel's taps lie on every other narrow tap (its step exactly twice the
+// narrow one's, as on the paper sensor): the meridians pass then samples those places once.
+override WIDE_TAPS_NESTED: bool = true;
 
 const GRID_OBJECT: u32 = 100u;
 // object_kind of the reference frame (no object; every pixel is shaded).

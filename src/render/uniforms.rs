@@ -153,12 +153,15 @@ impl SensorUniform {
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
     /// fields that shape control flow, fixed per sensor so the driver can fold the lens
     /// switch and unroll the loops.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 4] {
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 5] {
+        // Nested exactly as the shader steps them: the wide step twice the narrow one in f32.
+        let nested = self.wide_step_mm == 2.0 * self.narrow_step_mm;
         [
             ("LENS_MODEL", self.lens_model as f64),
             ("RAY_STEPS", self.ray_steps as f64),
             ("NARROW_TAPS", self.narrow_taps as f64),
             ("WIDE_TAPS", self.wide_taps as f64),
+            ("WIDE_TAPS_NESTED", if nested { 1.0 } else { 0.0 }),
         ]
     }
 }
