@@ -125,19 +125,8 @@ pub fn read_ranges_with<R>(
         let mut unpack = unpack;
         return Ok((0..ranges.len()).map(|k| unpack(k, &[])).collect());
     }
-    let fresh;
-    let staging = match staging {
-        Some(s) if fits(s, total) => s,
-        _ => {
-            fresh = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("geltip readback staging"),
-                size: total,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            &fresh
-        }
-    };
+    let mut fresh = None;
+    let staging = staging_or_fresh(ctx, staging, total, &mut fresh);
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -184,6 +173,25 @@ pub fn staging_bytes(ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<u64> {
         total += copy_size;
     }
     Ok(total)
+}
+
+/// `staging` when it can take `total` bytes, else a fresh staging buffer of that size, kept
+/// in `fresh` for the caller's scope.
+pub fn staging_or_fresh<'a>(
+    ctx: &GpuContext,
+    staging: Option<&'a wgpu::Buffer>,
+    total: u64,
+    fresh: &'a mut Option<wgpu::Buffer>,
+) -> &'a wgpu::Buffer {
+    match staging {
+        Some(s) if fits(s, total) => s,
+        _ => fresh.insert(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("geltip readback staging"),
+            size: total,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })),
+    }
 }
 
 fn fits(staging: &wgpu::Buffer, total: u64) -> bool {

@@ -13,7 +13,9 @@ use super::{
     Rect,
 };
 use crate::error::{GeltipError, Result};
-use crate::gpu::readback::{read_buffer, record_ranges, staging_bytes, unpack_ranges};
+use crate::gpu::readback::{
+    read_buffer, record_ranges, staging_bytes, staging_or_fresh, unpack_ranges,
+};
 use crate::gpu::shaders::create_compute_pipeline_with;
 use crate::gpu::GpuContext;
 use crate::object::Object;
@@ -1301,18 +1303,9 @@ impl Renderer {
         // The copies ride in the submission of the work they read: one round trip. (The
         // kept staging buffer holds a full batch; a scene of very many contacts may need
         // more for its fields.)
-        let fresh;
-        let staging = if self.staging.size() >= staging_bytes(&ranges)? {
-            &self.staging
-        } else {
-            fresh = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("geltip readback staging"),
-                size: staging_bytes(&ranges)?,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            &fresh
-        };
+        let mut fresh = None;
+        let total = staging_bytes(&ranges)?;
+        let staging = staging_or_fresh(self.ctx, Some(&self.staging), total, &mut fresh);
         record_ranges(&mut encoder, staging, &ranges)?;
         let submission = self.ctx.submit(what, encoder)?;
         let mut mapped = None;
