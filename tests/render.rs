@@ -534,16 +534,22 @@ fn same_inputs_give_identical_bytes() {
     assert_eq!(fresh.reference().rgba, r.reference().rgba);
 }
 
+/// A small contact (a cone 0.3 mm deep) and its frame from a fresh renderer of `sensor`:
+/// what a renderer that rendered other frames first must give for it.
+fn small_contact_alone(sensor: &Sensor) -> (Contact, Frame) {
+    let small = contact(Solid::Cone, Place::Rotation(62.0), 0.3);
+    let (alone, _) = Renderer::new(sensor).unwrap().render(&small).unwrap();
+    (small, alone)
+}
+
 #[test]
 fn a_frame_does_not_depend_on_the_frames_before_it() {
     // The renderer keeps the heightfield between frames and clears only what the last
     // contact touched: a contact rendered after a larger one that overlaps it must come out
     // exactly as from a fresh renderer.
     // (Checked: with the clear limited to the current rect, a few hundred bytes differ.)
-    let small = contact(Solid::Cone, Place::Rotation(62.0), 0.3);
     let mut r = paper();
-    let mut fresh = Renderer::new(r.sensor()).unwrap();
-    let (alone, _) = fresh.render(&small).unwrap();
+    let (small, alone) = small_contact_alone(r.sensor());
     let batch = r
         .render_batch(&[
             contact(Solid::Slab, Place::Rotation(60.0), 1.5),
@@ -561,15 +567,14 @@ fn a_frame_does_not_depend_on_the_frames_before_it() {
 fn a_refused_scene_leaves_the_next_frame_as_from_a_fresh_renderer() {
     // After a failed frame the renderer clears its whole heightfield at the next one (what
     // a failed submission left there is unknown): that frame still comes out exactly.
-    let small = contact(Solid::Cone, Place::Rotation(62.0), 0.3);
     let mut r = paper();
+    let (small, alone) = small_contact_alone(r.sensor());
     r.render(&contact(Solid::Slab, Place::Rotation(60.0), 1.5))
         .unwrap();
     let refused = render::Press::from(&contact(Solid::Sphere, Place::Rotation(45.0), -1.0));
     let e = r.render_scene(&[refused]).unwrap_err().to_string();
     assert!(e.contains("--depth"), "{e}");
     let (after, _) = r.render(&small).unwrap();
-    let (alone, _) = Renderer::new(r.sensor()).unwrap().render(&small).unwrap();
     assert!(
         after.rgba == alone.rgba,
         "the frame after a refused scene differs"
@@ -624,10 +629,8 @@ fn profiling_a_frame_times_every_stage_and_leaves_the_renderer_as_rendering_does
     // The profiler records the same stages as a frame (in one submission with timestamps
     // where the device has them): every stage named once, the GPU's share positive, and the
     // next frame exactly as from a fresh renderer (the profiled contact's texels are cleared).
-    let small = contact(Solid::Cone, Place::Rotation(62.0), 0.3);
     let mut r = paper();
-    let mut fresh = Renderer::new(r.sensor()).unwrap();
-    let (alone, _) = fresh.render(&small).unwrap();
+    let (small, alone) = small_contact_alone(r.sensor());
     let stages = r
         .profile_stages(&contact(Solid::Slab, Place::Rotation(60.0), 1.5))
         .unwrap();
