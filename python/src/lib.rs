@@ -7,7 +7,6 @@
 
 use geltip::finger::Region;
 use geltip::gpu::context::MAX_STREAMS;
-use geltip::gpu::GpuContext;
 use geltip::localise::{Localiser, Method};
 use geltip::object::Object;
 use geltip::render::gpu::{Renderer, MAX_BATCH};
@@ -944,24 +943,8 @@ impl Simulator {
                 .insert(name, Arc::new(loaded));
         }
         let rs = sensor.get().inner.clone();
-        // The streams' renderers start side by side.
         let mut renderers = detached(py, "starting the renderer", move || {
-            std::thread::scope(|scope| {
-                let started: Vec<_> = (0..streams)
-                    .map(|i| {
-                        let rs = &rs;
-                        scope.spawn(move || Renderer::on(rs, GpuContext::stream(i)?))
-                    })
-                    .collect();
-                started
-                    .into_iter()
-                    .map(|s| {
-                        s.join().unwrap_or_else(|_| {
-                            Err(GeltipError::Gpu("a renderer panicked at start-up".into()))
-                        })
-                    })
-                    .collect::<geltip::Result<Vec<Renderer>>>()
-            })
+            Renderer::on_streams(&rs, streams, &[])
         })?;
         let more = renderers.split_off(1).into_iter().map(Mutex::new).collect();
         let renderer = renderers.remove(0);

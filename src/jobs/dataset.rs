@@ -22,7 +22,6 @@
 use crate::error::{GeltipError, Result};
 use crate::finger::SurfaceCoord;
 use crate::gpu::context::MAX_STREAMS;
-use crate::gpu::GpuContext;
 use crate::object::{Object, Solid};
 use crate::output::{self, LineLog, PngColor, PngRowCache};
 use crate::render::gpu::{Renderer, MAX_BATCH};
@@ -838,29 +837,9 @@ fn render_samples(
     let mut config = spec.sensor.config.clone();
     config.render.noise = 0.0;
     let render_sensor = Sensor::from_config(spec.sensor.name.clone(), config)?;
-    // The streams' renderers start side by side (pipelines compile, the empty finger
-    // renders); every object's contact pipeline is built now, at start-up, not in the first
-    // batch's frames.
-    let start_stream = |i: usize| -> Result<Renderer> {
-        let mut renderer = Renderer::on(&render_sensor, GpuContext::stream(i)?)?;
-        renderer.ready_objects(objects)?;
-        Ok(renderer)
-    };
-    let mut renderers: Vec<Renderer> = std::thread::scope(|scope| {
-        let started: Vec<_> = (0..spec.streams)
-            .map(|i| scope.spawn(move || start_stream(i)))
-            .collect();
-        started
-            .into_iter()
-            .map(|s| {
-                s.join().unwrap_or_else(|_| {
-                    Err(GeltipError::Gpu(
-                        "a render stream panicked at start-up".into(),
-                    ))
-                })
-            })
-            .collect::<Result<_>>()
-    })?;
+    // Every object's contact pipeline is built now, at start-up, not in the first batch's
+    // frames.
+    let mut renderers = Renderer::on_streams(&render_sensor, spec.streams, objects)?;
     report.startup = start.elapsed();
     let renderer = &renderers[0];
     let start = Instant::now();
