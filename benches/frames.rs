@@ -32,8 +32,24 @@ fn main() -> anyhow::Result<()> {
     // solid once first, so N frames less 2 counts frames, not pipeline builds.
     let objects: Vec<_> = taps.iter().map(|c| c.object.clone()).collect();
     renderer.ready_objects(&objects)?;
+    let mut t = geltip::render::gpu::Timings::default();
+    let start = std::time::Instant::now();
     for k in 0..n {
         renderer.render(&taps[(k * 7) % taps.len()])?;
+        let r = renderer.timings();
+        t.prepare += r.prepare;
+        t.render += r.render;
+        t.readback += r.readback;
     }
+    // The split per frame, for a quick look outside a profiler (the wall clock here is
+    // noisy: compare two builds run alternately).
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3 / n.max(1) as f64;
+    eprintln!(
+        "{n} frames, ms a frame: wall {:.3}, prepare {:.3}, render {:.3}, readback {:.3}",
+        ms(start.elapsed()),
+        ms(t.prepare),
+        ms(t.render),
+        ms(t.readback)
+    );
     Ok(())
 }
