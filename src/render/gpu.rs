@@ -1339,32 +1339,42 @@ impl Renderer {
         let staging = staging_or_fresh(self.ctx, Some(&self.staging), total, &mut fresh);
         record_ranges(&mut encoder, staging, &ranges)?;
         let submission = self.ctx.submit(what, encoder)?;
+        // Each frame's image and indentation around the rows read (the reference's pixels,
+        // zero), built while the GPU works: this thread would only wait, and after the wait
+        // only the rows read are left to copy.
+        let (mut images, mut indentations): (Vec<_>, Vec<_>) = rows
+            .iter()
+            .map(|&(start, count)| {
+                let (reference, a, b) = (
+                    &self.reference.rgba,
+                    start as usize * 4,
+                    (start + count) as usize * 4,
+                );
+                let mut rgba = Vec::with_capacity(reference.len());
+                rgba.extend_from_slice(&reference[..a]);
+                rgba.resize(b, 0);
+                rgba.extend_from_slice(&reference[b..]);
+                (Some(rgba), Some(vec![0.0f32; pixels]))
+            })
+            .unzip();
         let mut mapped = None;
         let parts = unpack_ranges(self.ctx, staging, &ranges, submission, |k, bytes| {
             mapped.get_or_insert_with(Instant::now);
             if k >= frame_ranges {
                 return Part::Field(bytemuck::pod_collect_to_vec(bytes));
             }
-            let start = rows[k / 3].0 as usize;
+            let (frame, start) = (k / 3, rows[k / 3].0 as usize);
             match k % 3 {
-                // Each byte written once: the reference (or zero) around the rows read.
                 0 => {
-                    let reference = &self.reference.rgba;
-                    let mut rgba = Vec::with_capacity(reference.len());
-                    rgba.extend_from_slice(&reference[..start * 4]);
-                    rgba.extend_from_slice(bytes);
-                    rgba.extend_from_slice(&reference[start * 4 + bytes.len()..]);
+                    let mut rgba = images[frame].take().unwrap_or_default();
+                    rgba[start * 4..start * 4 + bytes.len()].copy_from_slice(bytes);
                     Part::Rgba(rgba)
                 }
                 1 => {
-                    let mut indentation = Vec::with_capacity(pixels);
-                    indentation.resize(start, 0.0f32);
-                    indentation.extend(
-                        bytes
-                            .chunks_exact(4)
-                            .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]])),
-                    );
-                    indentation.resize(pixels, 0.0);
+                    let mut indentation = indentations[frame].take().unwrap_or_default();
+                    for (depth, b) in indentation[start..].iter_mut().zip(bytes.chunks_exact(4)) {
+                        *depth = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+                    }
                     Part::Indentation(indentation)
                 }
                 _ => Part::Counters(bytemuck::pod_collect_to_vec(bytes)),
