@@ -10,7 +10,9 @@
 //! submit each on its own thread (fps over both); one and two non-overlapping contacts per frame
 //! (`render_scene`); and the CPU alternative (the CPU mirrors over the same footprint,
 //! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
-//! the machines here are shared and noisy), with the slowest and fastest pass's fps.
+//! the machines here are shared and noisy), with the slowest and fastest pass's fps. Then
+//! the stages of a contact frame, and what the device charges whatever the work: an empty
+//! submission, and a dispatch of one workgroup.
 
 use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
@@ -316,5 +318,73 @@ fn main() -> anyhow::Result<()> {
     for ((name, ms), (_, random_ms)) in columns[0].iter().zip(&columns[1]) {
         println!("| {name:<28} | {ms:>14.3} | {random_ms:>22.3} |");
     }
+    device_overhead(geltip::gpu::GpuContext::shared()?)
+}
+
+/// What the device charges whatever the work: a submission with nothing in it, and each
+/// compute dispatch of one workgroup that does next to nothing (50 in one submission, each
+/// in its own pass as the renderer records them). A contact frame has six dispatches and
+/// some fifteen copies and clears; on lavapipe each dispatch wakes the worker threads and
+/// waits for them, which is why per-contact dispatches weigh on frames of several contacts.
+fn device_overhead(ctx: &geltip::gpu::GpuContext) -> anyhow::Result<()> {
+    let d = &ctx.device;
+    let buffer = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("overhead probe"),
+        size: 256,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("overhead probe"),
+        source: wgpu::ShaderSource::Wgsl(
+            "@group(0) @binding(0) var<storage, read_write> b: array<u32>;\n\
+             @compute @workgroup_size(64) fn main(@builtin(global_invocation_id) id: vec3<u32>) \
+             { b[id.x] = b[id.x] + 1u; }"
+                .into(),
+        ),
+    });
+    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("overhead probe"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buffer.as_entire_binding(),
+        }],
+    });
+    // Seconds per submission of `dispatches` dispatches, the median of 9 after a warm-up.
+    let time = |dispatches: usize| -> anyhow::Result<f64> {
+        let mut seconds = Vec::new();
+        for _ in 0..10 {
+            let start = Instant::now();
+            let mut encoder = d.create_command_encoder(&Default::default());
+            for _ in 0..dispatches {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            ctx.submit_and_wait("timing the device's overhead", encoder)?;
+            seconds.push(start.elapsed().as_secs_f64());
+        }
+        seconds.remove(0);
+        seconds.sort_by(f64::total_cmp);
+        Ok(seconds[seconds.len() / 2])
+    };
+    let empty = time(0)?;
+    let fifty = time(50)?;
+    println!();
+    println!(
+        "device overhead: an empty submission and its wait {:.0} us; a dispatch of one workgroup {:.1} us",
+        empty * 1e6,
+        (fifty - empty) / 50.0 * 1e6
+    );
     Ok(())
 }
