@@ -154,7 +154,8 @@ pub struct Timings {
     /// CPU work before recording: poses, footprints, uniforms.
     pub prepare: Duration,
     /// Recording, submitting and waiting for the GPU work, which ends with copying the
-    /// frames to mappable memory (one submission, one wait), and mapping them.
+    /// frames to mappable memory (one submission, one wait), and mapping them; while the GPU
+    /// works, the frames' pixels that come from the reference are laid out.
     pub render: Duration,
     /// Unpacking the mapped frames into images and labels.
     pub readback: Duration,
@@ -1313,6 +1314,9 @@ impl Renderer {
             Indentation(Vec<f32>),
             Counters(Vec<u32>),
             Field(Vec<f32>),
+            // A range that does not fit the frame built for it (never, as the ranges are
+            // made): reported as an incomplete readback.
+            Incomplete,
         }
         let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> =
             Vec::with_capacity(3 * rows.len() + fields.len());
@@ -1365,18 +1369,23 @@ impl Renderer {
             }
             let (frame, start) = (k / 3, rows[k / 3].0 as usize);
             match k % 3 {
-                0 => {
-                    let mut rgba = images[frame].take().unwrap_or_default();
-                    rgba[start * 4..start * 4 + bytes.len()].copy_from_slice(bytes);
-                    Part::Rgba(rgba)
-                }
-                1 => {
-                    let mut indentation = indentations[frame].take().unwrap_or_default();
-                    for (depth, b) in indentation[start..].iter_mut().zip(bytes.chunks_exact(4)) {
-                        *depth = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+                0 => match images[frame].take() {
+                    Some(mut rgba) if start * 4 + bytes.len() <= rgba.len() => {
+                        rgba[start * 4..start * 4 + bytes.len()].copy_from_slice(bytes);
+                        Part::Rgba(rgba)
                     }
-                    Part::Indentation(indentation)
-                }
+                    _ => Part::Incomplete,
+                },
+                1 => match indentations[frame].take() {
+                    Some(mut indentation) if start + bytes.len() / 4 <= indentation.len() => {
+                        for (depth, b) in indentation[start..].iter_mut().zip(bytes.chunks_exact(4))
+                        {
+                            *depth = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+                        }
+                        Part::Indentation(indentation)
+                    }
+                    _ => Part::Incomplete,
+                },
                 _ => Part::Counters(bytemuck::pod_collect_to_vec(bytes)),
             }
         })?;
