@@ -36,10 +36,7 @@ fn main() -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     for k in 0..n {
         renderer.render(&taps[(k * 7) % taps.len()])?;
-        let r = renderer.timings();
-        t.prepare += r.prepare;
-        t.render += r.render;
-        t.readback += r.readback;
+        t.add(&renderer.timings());
     }
     // The split per frame, for a quick look outside a profiler (the wall clock here is
     // noisy: compare two builds run alternately).

@@ -85,13 +85,6 @@ fn passes(
         .collect()
 }
 
-fn add(total: &mut Timings, t: Timings) {
-    total.prepare += t.prepare;
-    total.render += t.render;
-    total.readback += t.readback;
-    total.touched_pixels += t.touched_pixels;
-}
-
 fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> anyhow::Result<Option<T>>
 where
     T::Err: std::error::Error + Send + Sync + 'static,
@@ -165,7 +158,7 @@ fn main() -> anyhow::Result<()> {
         let mut t = Timings::default();
         for _ in 0..n_ref {
             r.render_reference()?;
-            add(&mut t, r.timings());
+            t.add(&r.timings());
         }
         Ok(t)
     })?;
@@ -176,7 +169,7 @@ fn main() -> anyhow::Result<()> {
         let mut t = Timings::default();
         for c in &list {
             r.render(c)?;
-            add(&mut t, r.timings());
+            t.add(&r.timings());
         }
         Ok(t)
     })?;
@@ -194,7 +187,7 @@ fn main() -> anyhow::Result<()> {
             let mut t = Timings::default();
             for c in part {
                 renderer.render(c)?;
-                add(&mut t, renderer.timings());
+                t.add(&renderer.timings());
             }
             Ok(t)
         };
@@ -204,10 +197,7 @@ fn main() -> anyhow::Result<()> {
             (mine, other.join())
         });
         let mut t = ta?;
-        add(
-            &mut t,
-            tb.map_err(|_| anyhow::anyhow!("the second stream panicked"))??,
-        );
+        t.add(&tb.map_err(|_| anyhow::anyhow!("the second stream panicked"))??);
         Ok(t)
     })?;
     row("one per submit, 2 streams", &mut two_streams);
@@ -218,7 +208,7 @@ fn main() -> anyhow::Result<()> {
         let mut t = Timings::default();
         for batch in list.chunks(MAX_BATCH) {
             r.render_batch(batch)?;
-            add(&mut t, r.timings());
+            t.add(&r.timings());
         }
         Ok(t)
     })?;
@@ -240,7 +230,7 @@ fn main() -> anyhow::Result<()> {
         let mut t = Timings::default();
         for p in &ones {
             r.render_scene(std::slice::from_ref(p))?;
-            add(&mut t, r.timings());
+            t.add(&r.timings());
         }
         Ok(t)
     })?;
@@ -249,7 +239,7 @@ fn main() -> anyhow::Result<()> {
         let mut t = Timings::default();
         for pair in &twins {
             r.render_scene(pair)?;
-            add(&mut t, r.timings());
+            t.add(&r.timings());
         }
         Ok(t)
     })?;

@@ -164,7 +164,8 @@ pub struct Timings {
 }
 
 impl Timings {
-    fn add(&mut self, other: &Timings) {
+    /// Adds `other`'s phases and pixels to these (totals over several batches or frames).
+    pub fn add(&mut self, other: &Timings) {
         self.prepare += other.prepare;
         self.render += other.render;
         self.readback += other.readback;
