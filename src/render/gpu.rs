@@ -1344,22 +1344,16 @@ impl Renderer {
         let staging = staging_or_fresh(self.ctx, Some(&self.staging), total, &mut fresh);
         record_ranges(&mut encoder, staging, &ranges)?;
         let submission = self.ctx.submit(what, encoder)?;
-        // Each frame's image and indentation around the rows read (the reference's pixels,
-        // zero), built while the GPU works: this thread would only wait, and after the wait
-        // only the rows read are left to copy.
+        // Each frame's image and indentation as the reference's pixels and zeros, laid out
+        // while the GPU works: this thread would only wait, and after the wait only the rows
+        // read are left to copy over them.
         let (mut images, mut indentations): (Vec<_>, Vec<_>) = rows
             .iter()
-            .map(|&(start, count)| {
-                let (reference, a, b) = (
-                    &self.reference.rgba,
-                    start as usize * 4,
-                    (start + count) as usize * 4,
-                );
-                let mut rgba = Vec::with_capacity(reference.len());
-                rgba.extend_from_slice(&reference[..a]);
-                rgba.resize(b, 0);
-                rgba.extend_from_slice(&reference[b..]);
-                (Some(rgba), Some(vec![0.0f32; pixels]))
+            .map(|_| {
+                (
+                    Some(self.reference.rgba.clone()),
+                    Some(vec![0.0f32; pixels]),
+                )
             })
             .unzip();
         let mut mapped = None;
