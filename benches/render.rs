@@ -3,16 +3,17 @@
 //! <preset|file.toml>` for another sensor).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
-//! sensor), one contact per submission, and batches of contacts per submission; each split
+//! sensor), one contact per submission (and the same without the tile list, passes in
+//! turn: `Renderer::set_tile_list`), and batches of contacts per submission; each split
 //! into CPU preparation, GPU render (submit + wait, the copies for reading back included) and
 //! readback (unpacking the mapped frames), with the
 //! pixels re-rendered per frame; two renderers on devices of their own, one contact per
 //! submit each on its own thread (fps over both); one and two non-overlapping contacts per frame
-//! (`render_scene`); and the CPU alternative (the CPU mirrors over the same footprint,
+//! (`render_scene`; two also without the tile list); and the CPU alternative (the CPU mirrors over the same footprint,
 //! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps. Then
-//! the stages of a contact frame, and what the device charges whatever the work: an empty
-//! submission, and a dispatch of one workgroup.
+//! the stages of a contact frame, the tiles the tile list kept, and what the device charges
+//! whatever the work: an empty submission, and a dispatch of one workgroup.
 
 use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
@@ -63,6 +64,27 @@ fn row(name: &str, passes: &mut [Pass]) {
         per(p.t.readback),
         p.t.touched_pixels as f64 / p.frames as f64,
     );
+}
+
+/// Passes of `f` with the renderer's tile list on (the default) and off (touched pixels
+/// chosen from every pixel of the pixel rects: `Renderer::set_tile_list`), one of each in
+/// turn, so that both see the host alike.
+fn with_and_without_tile_list(
+    r: &mut Renderer,
+    repeat: usize,
+    frames: usize,
+    mut f: impl FnMut(&mut Renderer) -> anyhow::Result<Timings>,
+) -> anyhow::Result<(Vec<Pass>, Vec<Pass>)> {
+    let (mut on, mut off) = (Vec::new(), Vec::new());
+    for _ in 0..repeat {
+        for (list_tiles, out) in [(true, &mut on), (false, &mut off)] {
+            r.set_tile_list(list_tiles);
+            let result = passes(1, frames, || f(r));
+            r.set_tile_list(true);
+            out.extend(result?);
+        }
+    }
+    Ok((on, off))
 }
 
 /// Runs `f` (which renders `frames` frames and returns the renderer's timings) `repeat`
@@ -165,7 +187,7 @@ fn main() -> anyhow::Result<()> {
     row("no contact, full ray cast", &mut reference);
 
     let list = contacts(frames);
-    let mut single = passes(repeat, frames, || {
+    let (mut single, mut unlisted) = with_and_without_tile_list(&mut r, repeat, frames, |r| {
         let mut t = Timings::default();
         for c in &list {
             r.render(c)?;
@@ -174,6 +196,7 @@ fn main() -> anyhow::Result<()> {
         Ok(t)
     })?;
     row("one contact per submit", &mut single);
+    row("  the same, no tile list", &mut unlisted);
 
     // What a program that renders many contacts can do on the same cores: two renderers on
     // devices of their own (GpuContext::stream, as `geltip dataset --streams` does), each
@@ -235,15 +258,17 @@ fn main() -> anyhow::Result<()> {
         Ok(t)
     })?;
     row("one contact per scene", &mut one_scene);
-    let mut two_scene = passes(repeat, frames, || {
-        let mut t = Timings::default();
-        for pair in &twins {
-            r.render_scene(pair)?;
-            t.add(&r.timings());
-        }
-        Ok(t)
-    })?;
+    let (mut two_scene, mut two_unlisted) =
+        with_and_without_tile_list(&mut r, repeat, frames, |r| {
+            let mut t = Timings::default();
+            for pair in &twins {
+                r.render_scene(pair)?;
+                t.add(&r.timings());
+            }
+            Ok(t)
+        })?;
     row("two contacts per scene", &mut two_scene);
+    row("  the same, no tile list", &mut two_unlisted);
 
     // What a user could run instead on the same cores: the CPU mirrors over the same
     // footprint (the GPU's reference frame as the empty finger), rayon over the touched
@@ -308,6 +333,16 @@ fn main() -> anyhow::Result<()> {
     for ((name, ms), (_, random_ms)) in columns[0].iter().zip(&columns[1]) {
         println!("| {name:<28} | {ms:>14.3} | {random_ms:>22.3} |");
     }
+    println!();
+    let per_frame = |f: fn(&Timings) -> u64| {
+        single.iter().map(|p| f(&p.t)).sum::<u64>() as f64 / (repeat * frames) as f64
+    };
+    println!(
+        "tile list, one contact per submit: {:.0} tiles ({:.0} pixels) selected from a frame, {:.0} pixels touched",
+        per_frame(|t| t.listed_tiles),
+        64.0 * per_frame(|t| t.listed_tiles),
+        per_frame(|t| t.touched_pixels)
+    );
     device_overhead(geltip::gpu::GpuContext::shared()?)
 }
 
@@ -370,7 +405,6 @@ fn device_overhead(ctx: &geltip::gpu::GpuContext) -> anyhow::Result<()> {
     };
     let empty = time(0)?;
     let fifty = time(50)?;
-    println!();
     println!(
         "device overhead: an empty submission and its wait {:.0} us; a dispatch of one workgroup {:.1} us",
         empty * 1e6,

@@ -407,10 +407,19 @@ fn footprints_hold_every_moved_texel_and_its_pixels() {
     footprints_hold_moved_texels(&Sensor::from_config("soft", soft).unwrap(), 4);
 }
 
-/// Checks the taps at the paper's positions from index `first` on.
+/// Checks the taps at the paper's positions from index `first` on; and that the tiles the
+/// renderer selects touched pixels from (`camera::select_tiles`, from their probes' texels)
+/// hold every touched pixel of the pixel rectangle, while most of its tiles are left out.
 fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
     let sensor = sensor.clone();
     let grid = render::HeightfieldGrid::for_sensor(&sensor);
+    let tiles = camera::probe_tiles(&sensor, &grid);
+    // The tiles by their middle probes alone: a cull that must miss touched pixels, or the
+    // check below could not tell a good one from a bad one.
+    let empty = [1, 1, 0, 0];
+    let middle_only: Vec<_> = tiles.iter().map(|r| [empty, r[1], empty]).collect();
+    let (across, _) = camera::tile_grid(sensor.width, sensor.height);
+    let (mut rect_tiles, mut listed_tiles, mut missed_by_middle) = (0, 0, 0);
     let config = &sensor.config.elastomer;
     let kernel = elastomer::Kernel::for_config(&sensor.config, &grid);
     let reach = kernel.reach_mm;
@@ -499,10 +508,102 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
                 }
             }
             assert!(moved > 20, "{what}: only {moved} texels move");
+            let listed = camera::select_tiles(&sensor, &grid, &h, &tiles, px, t);
+            let by_middle = camera::select_tiles(&sensor, &grid, &h, &middle_only, px, t);
+            let touched = camera::select_touched(&sensor, &grid, &h, px);
+            assert!(!touched.is_empty(), "{what}: no pixel touched");
+            for &i in &touched {
+                let (x, y) = (i % sensor.width, i / sensor.width);
+                let tile = (y / camera::PIXEL_TILE) * across + x / camera::PIXEL_TILE;
+                assert!(
+                    listed.contains(&tile),
+                    "{what}: touched pixel ({x}, {y}) lies in tile {tile}, not listed"
+                );
+                missed_by_middle += !by_middle.contains(&tile) as usize;
+            }
+            let span = |lo: u32, len: u32| {
+                (lo + len - 1) / camera::PIXEL_TILE - lo / camera::PIXEL_TILE + 1
+            };
+            rect_tiles += span(px.x, px.w) * span(px.y, px.h);
+            listed_tiles += listed.len() as u32;
             checked += 1;
         }
     }
     assert_eq!(checked, 7 * (8 - first));
+    assert!(
+        missed_by_middle > 0,
+        "{}: tiles by their middle probes alone held every touched pixel",
+        sensor.name
+    );
+    assert!(
+        (listed_tiles as f64) < 0.7 * rect_tiles as f64,
+        "{}: {listed_tiles} of the pixel rectangles' {rect_tiles} tiles listed",
+        sensor.name
+    );
+    eprintln!(
+        "{}: {listed_tiles} of the pixel rectangles' {rect_tiles} tiles listed",
+        sensor.name
+    );
+}
+
+/// Contact frames choose their touched pixels from the tiles whose probes see displaced
+/// texels (`select_tiles`); without that list they test every pixel of the pixel rectangle.
+/// Both render the same bytes, and list the same pixels, for single contacts (every fifth
+/// of the paper's taps) and for scenes of two presses, apart and overlapping; the list
+/// leaves most of the rectangles' tiles out.
+#[test]
+fn the_tile_list_renders_what_testing_every_pixel_renders() {
+    let mut r = paper();
+    let both = |r: &mut Renderer, f: &dyn Fn(&mut Renderer) -> Frame| {
+        r.set_tile_list(false);
+        let every = (f(r), r.timings());
+        r.set_tile_list(true);
+        let listed = (f(r), r.timings());
+        (every, listed)
+    };
+    let taps = geltip::jobs::experiment::all_taps(&Default::default());
+    let mut tiles = 0;
+    for c in taps.iter().step_by(5) {
+        let ((a, ta), (b, tb)) = both(&mut r, &|r| r.render(c).unwrap().0);
+        let what = format!("{:?} at {:?}", c.object, c.place);
+        assert!(
+            a.rgba == b.rgba && a.indentation == b.indentation,
+            "{what}: frames differ"
+        );
+        assert_eq!(ta.touched_pixels, tb.touched_pixels, "{what}");
+        assert!(
+            tb.touched_pixels > 0 && tb.listed_tiles > 0,
+            "{what}: {tb:?}"
+        );
+        assert_eq!(ta.listed_tiles, 0, "{what}: listed tiles with the list off");
+        // Every touched pixel lies in a listed tile.
+        assert!(tb.touched_pixels <= 64 * tb.listed_tiles, "{what}: {tb:?}");
+        tiles += tb.listed_tiles;
+    }
+    assert!(tiles > 0);
+    let press = |solid, place, azimuth_deg, depth_mm| {
+        render::Press::from(&Contact {
+            azimuth_deg,
+            ..contact(solid, place, depth_mm)
+        })
+    };
+    let apart = [
+        press(Solid::Sphere, Place::Rotation(30.0), 0.0, 1.0),
+        press(Solid::Edge, Place::Translation(8.0), 180.0, 0.8),
+    ];
+    let overlapping = [
+        press(Solid::Cylinder, Place::Translation(5.0), 30.0, 1.2),
+        press(Solid::Sphere, Place::Translation(8.0), 40.0, 0.8),
+    ];
+    for scene in [&apart, &overlapping] {
+        let ((a, ta), (b, tb)) = both(&mut r, &|r| r.render_scene(scene).unwrap().0);
+        assert!(
+            a.rgba == b.rgba && a.indentation == b.indentation,
+            "scenes differ"
+        );
+        assert_eq!(ta.touched_pixels, tb.touched_pixels);
+        assert!(tb.touched_pixels > 0 && tb.listed_tiles > 0, "{tb:?}");
+    }
 }
 
 #[test]

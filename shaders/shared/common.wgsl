@@ -129,6 +129,13 @@ const PROBES_STRIDE: u32 = 2u;
 @group(0) @binding(12) var height_map: texture_2d<f32>;
 // The same for the rays' probes: pixel (x, y)'s two vec4 are texels (2x, y) and (2x + 1, y).
 @group(0) @binding(13) var probe_map: texture_2d<f32>;
+// Written once by the reference frame, PROBE_TILE_STRIDE vec4 per tile of PIXEL_TILE x
+// PIXEL_TILE pixels (on the image's grid, row by row): for each of its rays' probes a, b and
+// c, the range of texels (x0, y0, x1, y1) their bilinear samples read, over the tile's seen
+// pixels (x0 > x1 when the lens sees none of them). select_tiles reads it.
+@group(0) @binding(15) var<storage, read_write> probe_tiles: array<vec4<i32>>;
+const PROBE_TILE_STRIDE: u32 = 3u;
+const PIXEL_TILE: u32 = 8u;
 // Nearest, clamped to the edge: only for textureGather, which fetches a texel's 2x2 block
 // in one sampler operation (the weights and the zero outside the grid are ours).
 @group(0) @binding(14) var map_sampler: sampler;
@@ -143,7 +150,12 @@ const DEEP_COUNT: u32 = 2u;
 // the deep pixels, as indirect dispatches.
 const SHALLOW_DISPATCH: u32 = 4u;
 const DEEP_DISPATCH: u32 = 8u;
+// Tiles on the tile list (camera.wgsl select_tiles), and the indirect dispatch of
+// select_listed over them (three words).
+const TILE_COUNT: u32 = 3u;
+const SELECT_DISPATCH: u32 = 12u;
 // The touched pixels' indices (y * width + x) start here; the list holds a frame's pixels.
+// The tile list follows it (tile indices, row by row on the image's grid of tiles).
 const TOUCHED_LIST: u32 = 64u;
 // Invocations per workgroup of the passes over the touched list.
 const TOUCHED_WORKGROUP: u32 = 64u;

@@ -7,6 +7,7 @@
 //! Frames of a batch are recorded into one submission, each into its own slice of the
 //! output buffers, and read back together.
 
+use super::camera::{tile_grid, PIXEL_TILE};
 use super::uniforms::{object_kind, FrameUniform, SensorUniform};
 use super::{
     contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press,
@@ -42,6 +43,9 @@ struct Pipelines {
     skin_normals: wgpu::ComputePipeline,
     camera: wgpu::ComputePipeline,
     select_touched: wgpu::ComputePipeline,
+    probe_tiles_of_rays: wgpu::ComputePipeline,
+    select_tiles: wgpu::ComputePipeline,
+    select_listed: wgpu::ComputePipeline,
     camera_shallow: wgpu::ComputePipeline,
     camera_deep: wgpu::ComputePipeline,
     add_noise: wgpu::ComputePipeline,
@@ -161,6 +165,9 @@ pub struct Timings {
     pub readback: Duration,
     /// Pixels the camera and LED stages re-rendered (the touched lists' lengths), summed.
     pub touched_pixels: u64,
+    /// Tiles of 8 x 8 pixels whose pixels the touched lists were chosen from (the tile
+    /// lists' lengths: [`Renderer::set_tile_list`]), summed; 0 with the tile list off.
+    pub listed_tiles: u64,
 }
 
 impl Timings {
@@ -170,6 +177,7 @@ impl Timings {
         self.render += other.render;
         self.readback += other.readback;
         self.touched_pixels += other.touched_pixels;
+        self.listed_tiles += other.listed_tiles;
     }
 }
 
@@ -202,6 +210,11 @@ pub struct Renderer {
     probes: wgpu::Buffer,
     /// `probes` as the passes read it: pixel (x, y)'s two vec4 are texels (2x, y), (2x+1, y).
     probe_map: MapTexture,
+    /// Per tile of pixels, the texels its probes read (written after the reference frame).
+    probe_tiles: wgpu::Buffer,
+    /// Whether contact frames select their touched pixels over the tiles `select_tiles`
+    /// lists (the default) or over every pixel of their rect: [`Renderer::set_tile_list`].
+    list_tiles: bool,
     /// Nearest, clamped: the maps' textureGather (see `shaders/shared/common.wgsl`).
     map_sampler: wgpu::Sampler,
     image: wgpu::Buffer,
@@ -279,9 +292,29 @@ const SHALLOW_DISPATCH: u64 = 4;
 const TOUCHED_LIST: u64 = 64;
 /// Bytes of the counters before the touched list.
 const COUNTER_HEADER_BYTES: u64 = TOUCHED_LIST * 4;
-/// Bytes of one frame's indirect dispatch arguments: the shallow pass's three words, then at
-/// 16 bytes the deep pass's.
-const DISPATCH_ARGS_BYTES: u64 = 32;
+/// Tiles on the tile list, and select_listed's indirect dispatch arguments (three words).
+const TILE_COUNT: usize = 3;
+const SELECT_DISPATCH: u64 = 12;
+/// Bytes of one frame's indirect dispatch arguments: the shallow pass's three words, at 16
+/// bytes the deep pass's, at 32 bytes select_listed's.
+const DISPATCH_ARGS_BYTES: u64 = 48;
+/// Where select_listed's arguments lie in a frame's.
+const SELECT_ARGS_OFFSET: u64 = 32;
+/// Bytes per tile of `probe_tiles` (WGSL `PROBE_TILE_STRIDE` vec4<i32>).
+const PROBE_TILE_BYTES: u64 = 3 * 16;
+/// Invocations (tiles) per workgroup of `select_tiles`: one SIMD group on llvmpipe, so the
+/// tiles of a small rect still spread over the cores.
+const SELECT_TILES_WORKGROUP: u32 = 8;
+
+/// Tiles of the image's tile grid that `r` overlaps.
+fn tiles_over(r: Rect) -> u64 {
+    if r.w == 0 || r.h == 0 {
+        return 0;
+    }
+    let across = (r.x + r.w - 1) / PIXEL_TILE - r.x / PIXEL_TILE + 1;
+    let down = (r.y + r.h - 1) / PIXEL_TILE - r.y / PIXEL_TILE + 1;
+    across as u64 * down as u64
+}
 
 /// Pixels on a frame's touched list (both kinds), from its counters.
 fn touched_pixels(counters: &[u32]) -> u64 {
@@ -378,7 +411,10 @@ impl Renderer {
         let texels = grid.texels as u64 * grid.texels as u64;
         let pixels = sensor.width as u64 * sensor.height as u64;
         let slot_bytes = (pixels * 4).next_multiple_of(256);
-        let counter_bytes = (COUNTER_HEADER_BYTES + pixels * 4).next_multiple_of(256);
+        let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
+        let tiles = tiles_x as u64 * tiles_y as u64;
+        // The counters, the touched list (a pixel each) and the tile list (a tile each).
+        let counter_bytes = (COUNTER_HEADER_BYTES + pixels * 4 + tiles * 4).next_multiple_of(256);
         let downlevel = ctx.adapter.get_downlevel_capabilities();
         if !downlevel
             .flags
@@ -457,6 +493,7 @@ impl Renderer {
                 ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
                 count: None,
             },
+            layout_entry(15, Storage { read_only: false }),
         ];
         let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
             let layout = ctx
@@ -485,6 +522,9 @@ impl Renderer {
             skin_normals: p("camera", "skin_normals")?,
             camera: p("camera", "camera")?,
             select_touched: p("camera", "select_touched")?,
+            probe_tiles_of_rays: p("camera", "probe_tiles_of_rays")?,
+            select_tiles: p("camera", "select_tiles")?,
+            select_listed: p("camera", "select_listed")?,
             camera_shallow: p("camera", "camera_shallow")?,
             camera_deep: p("camera", "camera_deep")?,
             add_noise: p("leds", "add_noise")?,
@@ -540,6 +580,8 @@ impl Renderer {
                 pixels * PROBES_BYTES_PER_PIXEL,
                 none,
             ),
+            probe_tiles: storage(ctx, "geltip probe tiles", tiles * PROBE_TILE_BYTES, none),
+            list_tiles: true,
             image: storage(ctx, "geltip image", slot_bytes * MAX_BATCH as u64, none),
             indentation: storage(
                 ctx,
@@ -649,6 +691,7 @@ impl Renderer {
             map(Map::Height),
             wgpu::BindingResource::TextureView(&self.probe_map.view),
             wgpu::BindingResource::Sampler(&self.map_sampler),
+            whole(&self.probe_tiles),
         ];
         let entries: Vec<wgpu::BindGroupEntry> = resources
             .into_iter()
@@ -721,7 +764,7 @@ impl Renderer {
         slot: u64,
         rect: Rect,
     ) {
-        self.record_select(encoder, bind, slot, rect);
+        self.record_select(encoder, slot, (rect, bind), &[(rect, bind)]);
         self.record_touched_passes(encoder, bind, slot);
     }
 
@@ -738,23 +781,55 @@ impl Renderer {
         self.dispatch_indirect(encoder, &p.camera_deep, bind, args + 16);
     }
 
-    /// The touched list of `rect` and the copy of its passes' sizes to `dispatch_args`.
+    /// Frame `slot`'s touched list, and the copy of its passes' sizes to `dispatch_args`.
+    /// The pixels that can be touched lie in `pieces` (pixel rects, each with a bind group
+    /// whose uniform holds it as its pixel rect), all within `span` (its bind group's
+    /// uniform holds it as its pixel rect, and as its texel rect the texels that can be
+    /// displaced). With the tile list on, `select_tiles` lists the span's tiles whose probes
+    /// see displaced texels and `select_listed` runs over those alone; otherwise
+    /// `select_touched` runs over every pixel of each piece.
     fn record_select(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        bind: &wgpu::BindGroup,
         slot: u64,
-        rect: Rect,
+        span: (Rect, &wgpu::BindGroup),
+        pieces: &[(Rect, &wgpu::BindGroup)],
     ) {
-        let g = (groups(rect.w, WORKGROUP), groups(rect.h, WORKGROUP));
-        Self::dispatch(encoder, &self.pipelines.select_touched, bind, g);
+        let p = &self.pipelines;
+        let args = slot * DISPATCH_ARGS_BYTES;
+        if self.list_tiles {
+            let (r, bind) = span;
+            let g = groups(tiles_over(r) as u32, SELECT_TILES_WORKGROUP);
+            Self::dispatch(encoder, &p.select_tiles, bind, (g, 1));
+            encoder.copy_buffer_to_buffer(
+                &self.counters,
+                slot * self.counter_bytes + SELECT_DISPATCH * 4,
+                &self.dispatch_args,
+                args + SELECT_ARGS_OFFSET,
+                Some(12),
+            );
+            self.dispatch_indirect(encoder, &p.select_listed, bind, args + SELECT_ARGS_OFFSET);
+        } else {
+            for (r, bind) in pieces {
+                let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
+                Self::dispatch(encoder, &p.select_touched, bind, g);
+            }
+        }
         encoder.copy_buffer_to_buffer(
             &self.counters,
             slot * self.counter_bytes + SHALLOW_DISPATCH * 4,
             &self.dispatch_args,
-            slot * DISPATCH_ARGS_BYTES,
-            Some(DISPATCH_ARGS_BYTES),
+            args,
+            Some(SELECT_ARGS_OFFSET),
         );
+    }
+
+    /// Whether contact frames list the tiles of pixels that can be touched first and select
+    /// over those alone (on, the default), or select over every pixel of their rects (the
+    /// renderer before the tile list; the frames are the same: `tests/render.rs`). For
+    /// benchmarks and tests.
+    pub fn set_tile_list(&mut self, on: bool) {
+        self.list_tiles = on;
     }
 
     /// Zeroes the heightfield buffers' rows `rect` spans (all of them without a rect).
@@ -976,6 +1051,13 @@ impl Renderer {
             (groups(w, WORKGROUP), groups(h, WORKGROUP)),
         );
         self.copy_probes_to_map(&mut encoder);
+        let (tx, ty) = tile_grid(w, h);
+        Self::dispatch(
+            &mut encoder,
+            &self.pipelines.probe_tiles_of_rays,
+            &bind,
+            (groups(tx * ty, 64), 1),
+        );
         encoder.copy_buffer_to_buffer(
             &self.image,
             0,
@@ -995,6 +1077,7 @@ impl Renderer {
             render,
             readback: start.elapsed() - render,
             touched_pixels: (w * h) as u64,
+            listed_tiles: 0,
         };
         Ok(())
     }
@@ -1242,6 +1325,7 @@ impl Renderer {
         for part in read.frames {
             let c = part.counters;
             timings.touched_pixels += touched_pixels(&c);
+            timings.listed_tiles += c[TILE_COUNT] as u64;
             let frame = Frame {
                 width: w,
                 height: h,
@@ -1480,7 +1564,7 @@ impl Renderer {
             }
             Step::Select => {
                 if let Some(r) = p.pixel_rect {
-                    self.record_select(encoder, &bind, 0, r);
+                    self.record_select(encoder, 0, (r, &bind), &[(r, &bind)]);
                 }
             }
             Step::Touched => {
@@ -1705,6 +1789,7 @@ impl Renderer {
         };
         let render_start = Instant::now();
         let (w, h) = (self.sensor.width, self.sensor.height);
+        let texel_span = texel_pieces.iter().copied().reduce(|a, b| a.union(&b));
         let piece_uniform = |t: Option<Rect>, r: Option<Rect>| {
             let mut u = prepared[0].uniform;
             u.texel_rect = t.map_or([0; 4], |t| [t.x, t.y, t.w, t.h]);
@@ -1740,9 +1825,11 @@ impl Renderer {
         let whole_bind = self.bind_group(&whole_uniform, 0, None);
         // The rows the scene can change (every row with noise), as `run` does per contact.
         let pixel_span = pixel_pieces.iter().copied().reduce(|a, b| a.union(&b));
+        let span_uniform = self.uniform_buffer(&piece_uniform(texel_span, pixel_span));
+        let span_bind = self.bind_group(&span_uniform, 0, None);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         self.record_frame_start(&mut encoder, 0, pixel_span);
-        if let Some(span) = texel_pieces.iter().copied().reduce(|a, b| a.union(&b)) {
+        if let Some(span) = texel_span {
             // The contact stage keeps the deepest penetration: it must start from zero, and
             // the maps must lose what the last frame left outside this one.
             let region = self.dirty.map_or(span, |d| d.union(&span));
@@ -1766,18 +1853,10 @@ impl Renderer {
             }
             self.dirty = Some(span);
         }
-        if !pixel_pieces.is_empty() {
-            for (r, bind) in pixel_pieces.iter().zip(&pixel_binds) {
-                let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
-                Self::dispatch(&mut encoder, &self.pipelines.select_touched, bind, g);
-            }
-            encoder.copy_buffer_to_buffer(
-                &self.counters,
-                SHALLOW_DISPATCH * 4,
-                &self.dispatch_args,
-                0,
-                Some(DISPATCH_ARGS_BYTES),
-            );
+        if let Some(span) = pixel_span {
+            let pieces: Vec<(Rect, &wgpu::BindGroup)> =
+                pixel_pieces.iter().copied().zip(&pixel_binds).collect();
+            self.record_select(&mut encoder, 0, (span, &span_bind), &pieces);
             self.record_touched_passes(&mut encoder, &whole_bind, 0);
         }
         if self.sensor.config.render.noise > 0.0 {
@@ -1803,6 +1882,7 @@ impl Renderer {
         };
         let c = part.counters;
         timings.touched_pixels = touched_pixels(&c);
+        timings.listed_tiles = c[TILE_COUNT] as u64;
         let frame = Frame {
             width: w,
             height: h,
