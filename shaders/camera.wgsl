@@ -273,7 +273,8 @@ fn tiles_y() -> u32 {
 }
 
 // Once, after the reference frame (whose probes it reads): per tile of pixels, the texels
-// its probes' bilinear samples read (probe_tiles). Mirror: src/render/camera.rs probe_tiles.
+// its probes' bilinear samples read (in `probes`, after the pixels'). Mirror:
+// src/render/camera.rs probe_tiles.
 @compute @workgroup_size(64)
 fn probe_tiles_of_rays(@builtin(global_invocation_id) id: vec3<u32>) {
     let tile = id.x;
@@ -298,10 +299,15 @@ fn probe_tiles_of_rays(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    let at = PROBE_TILE_STRIDE * tile;
-    probe_tiles[at] = clamped_to_grid(a);
-    probe_tiles[at + 1u] = clamped_to_grid(b);
-    probe_tiles[at + 2u] = clamped_to_grid(c);
+    let at = probe_tiles_at() + PROBE_TILE_STRIDE * tile;
+    probes[at] = bitcast<vec4<f32>>(clamped_to_grid(a));
+    probes[at + 1u] = bitcast<vec4<f32>>(clamped_to_grid(b));
+    probes[at + 2u] = bitcast<vec4<f32>>(clamped_to_grid(c));
+}
+
+// Where the tiles' texel ranges start in `probes` (after the pixels' probes).
+fn probe_tiles_at() -> u32 {
+    return PROBES_STRIDE * sensor.image_size.x * sensor.image_size.y;
 }
 
 // Range r grown by the 2x2 block of texels a bilinear sample at disc position u reads
@@ -359,10 +365,10 @@ fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = frame.texel_rect;
     let lo = vec2<i32>(t.xy);
     let hi = vec2<i32>(t.xy + t.zw) - 1;
-    let at = PROBE_TILE_STRIDE * tile;
+    let at = probe_tiles_at() + PROBE_TILE_STRIDE * tile;
     var moved = false;
     for (var k = 0u; k < PROBE_TILE_STRIDE; k++) {
-        let range = probe_tiles[at + k];
+        let range = bitcast<vec4<i32>>(probes[at + k]);
         moved = moved || range_moved(vec4<i32>(max(range.xy, lo), min(range.zw, hi)));
     }
     if !moved {

@@ -212,3 +212,61 @@ fn embedded_registry_matches_the_files() {
 
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
+
+/// Every stage fits WebGPU's guaranteed limits on bindings a shader stage may use (the
+/// renderer asks for no more): 8 storage buffers, 16 sampled textures, 12 uniform buffers,
+/// 16 samplers. One stage over a limit would keep the renderer off devices that offer just
+/// those. A module with a ninth storage buffer fails the check.
+#[test]
+fn stages_fit_webgpus_guaranteed_binding_limits() {
+    use naga::{AddressSpace, TypeInner};
+    let limits = wgpu::Limits::defaults();
+    let over = |source: &str| -> Vec<String> {
+        let module = naga::front::wgsl::parse_str(source).expect("parses");
+        let (mut storage, mut uniform, mut textures, mut samplers) = (0, 0, 0, 0);
+        for (_, g) in module.global_variables.iter() {
+            match (g.space, &module.types[g.ty].inner) {
+                (AddressSpace::Storage { .. }, _) => storage += 1,
+                (AddressSpace::Uniform, _) => uniform += 1,
+                (AddressSpace::Handle, TypeInner::Image { .. }) => textures += 1,
+                (AddressSpace::Handle, TypeInner::Sampler { .. }) => samplers += 1,
+                _ => {}
+            }
+        }
+        [
+            (
+                "storage buffers",
+                storage,
+                limits.max_storage_buffers_per_shader_stage,
+            ),
+            (
+                "uniform buffers",
+                uniform,
+                limits.max_uniform_buffers_per_shader_stage,
+            ),
+            (
+                "sampled textures",
+                textures,
+                limits.max_sampled_textures_per_shader_stage,
+            ),
+            ("samplers", samplers, limits.max_samplers_per_shader_stage),
+        ]
+        .into_iter()
+        .filter(|&(_, n, max)| n > max)
+        .map(|(what, n, max)| format!("{what}: {n} > {max}"))
+        .collect()
+    };
+    let mut failures = Vec::new();
+    for (name, _) in STAGES {
+        let source = geltip::gpu::shaders::compose(name).expect("composes");
+        for f in over(&source) {
+            failures.push(format!("{name}.wgsl: {f}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    // The check can fail: one more storage buffer than the limit.
+    let extra: String = (0..=limits.max_storage_buffers_per_shader_stage)
+        .map(|i| format!("@group(1) @binding({i}) var<storage, read_write> b{i}: array<u32>;\n"))
+        .collect();
+    assert!(!over(&extra).is_empty());
+}

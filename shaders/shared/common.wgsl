@@ -107,7 +107,12 @@ const REFERENCE_FRAME: u32 = 101u;
 @group(0) @binding(4) var<storage, read_write> height: array<f32>;
 // Written once by the reference frame, PROBES_STRIDE vec4 per pixel: the disc positions of
 // the three probes of the pixel's ray (a.xy, b.xy), (c.xy, 1, 0); the second vec4's z marks
-// the pixels the lens sees (0 beyond it).
+// the pixels the lens sees (0 beyond it). After the pixels' (at probe_tiles_at()),
+// PROBE_TILE_STRIDE vec4 per tile of PIXEL_TILE x PIXEL_TILE pixels (on the image's grid,
+// row by row): for each of its rays' probes a, b and c, the range of texels (x0, y0, x1, y1,
+// i32 bits) their bilinear samples read over the tile's seen pixels (x0 > x1 when the lens
+// sees none of them); camera.wgsl select_tiles reads them. (In this buffer rather than one
+// of their own: WebGPU guarantees eight storage buffers a stage, and these are the eight.)
 @group(0) @binding(5) var<storage, read_write> probes: array<vec4<f32>>;
 // Mirror: src/render/gpu.rs PROBES_BYTES_PER_PIXEL.
 const PROBES_STRIDE: u32 = 2u;
@@ -129,11 +134,6 @@ const PROBES_STRIDE: u32 = 2u;
 @group(0) @binding(12) var height_map: texture_2d<f32>;
 // The same for the rays' probes: pixel (x, y)'s two vec4 are texels (2x, y) and (2x + 1, y).
 @group(0) @binding(13) var probe_map: texture_2d<f32>;
-// Written once by the reference frame, PROBE_TILE_STRIDE vec4 per tile of PIXEL_TILE x
-// PIXEL_TILE pixels (on the image's grid, row by row): for each of its rays' probes a, b and
-// c, the range of texels (x0, y0, x1, y1) their bilinear samples read, over the tile's seen
-// pixels (x0 > x1 when the lens sees none of them). select_tiles reads it.
-@group(0) @binding(15) var<storage, read_write> probe_tiles: array<vec4<i32>>;
 const PROBE_TILE_STRIDE: u32 = 3u;
 const PIXEL_TILE: u32 = 8u;
 // Nearest, clamped to the edge: only for textureGather, which fetches a texel's 2x2 block

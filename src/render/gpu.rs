@@ -206,12 +206,11 @@ pub struct Renderer {
     maps: [MapTexture; 3],
     /// Texels the maps may hold non-zero (the last contact's texel rect).
     dirty: Option<Rect>,
-    /// Per pixel, where its ray crosses the shell (written by the reference frame).
+    /// Per pixel, where its ray crosses the shell (written by the reference frame); then
+    /// per tile of pixels, the texels those crossings read (`probe_tiles_of_rays`).
     probes: wgpu::Buffer,
     /// `probes` as the passes read it: pixel (x, y)'s two vec4 are texels (2x, y), (2x+1, y).
     probe_map: MapTexture,
-    /// Per tile of pixels, the texels its probes read (written after the reference frame).
-    probe_tiles: wgpu::Buffer,
     /// Whether contact frames select their touched pixels over the tiles `select_tiles`
     /// lists (the default) or over every pixel of their rect: [`Renderer::set_tile_list`].
     list_tiles: bool,
@@ -300,7 +299,8 @@ const SELECT_DISPATCH: u64 = 12;
 const DISPATCH_ARGS_BYTES: u64 = 48;
 /// Where select_listed's arguments lie in a frame's.
 const SELECT_ARGS_OFFSET: u64 = 32;
-/// Bytes per tile of `probe_tiles` (WGSL `PROBE_TILE_STRIDE` vec4<i32>).
+/// Bytes per tile of the tiles' texel ranges at the end of `probes` (WGSL
+/// `PROBE_TILE_STRIDE` vec4<i32>).
 const PROBE_TILE_BYTES: u64 = 3 * 16;
 /// Invocations (tiles) per workgroup of `select_tiles`: one SIMD group on llvmpipe, so the
 /// tiles of a small rect still spread over the cores.
@@ -429,7 +429,8 @@ impl Renderer {
         let allowed = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        let image_bytes = (pixels * PROBES_BYTES_PER_PIXEL).max(slot_bytes * MAX_BATCH as u64);
+        let probes_bytes = pixels * PROBES_BYTES_PER_PIXEL + tiles * PROBE_TILE_BYTES;
+        let image_bytes = probes_bytes.max(slot_bytes * MAX_BATCH as u64);
         if image_bytes > allowed {
             return Err(GeltipError::input(
                 "image",
@@ -493,7 +494,6 @@ impl Renderer {
                 ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
                 count: None,
             },
-            layout_entry(15, Storage { read_only: false }),
         ];
         let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
             let layout = ctx
@@ -574,13 +574,7 @@ impl Renderer {
                 label: Some("geltip map sampler"),
                 ..Default::default()
             }),
-            probes: storage(
-                ctx,
-                "geltip ray probes",
-                pixels * PROBES_BYTES_PER_PIXEL,
-                none,
-            ),
-            probe_tiles: storage(ctx, "geltip probe tiles", tiles * PROBE_TILE_BYTES, none),
+            probes: storage(ctx, "geltip ray probes", probes_bytes, none),
             list_tiles: true,
             image: storage(ctx, "geltip image", slot_bytes * MAX_BATCH as u64, none),
             indentation: storage(
@@ -691,7 +685,6 @@ impl Renderer {
             map(Map::Height),
             wgpu::BindingResource::TextureView(&self.probe_map.view),
             wgpu::BindingResource::Sampler(&self.map_sampler),
-            whole(&self.probe_tiles),
         ];
         let entries: Vec<wgpu::BindGroupEntry> = resources
             .into_iter()
