@@ -521,11 +521,9 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
                 );
                 missed_by_middle += !by_middle.contains(&tile) as usize;
             }
-            let span = |lo: u32, len: u32| {
-                (lo + len - 1) / camera::PIXEL_TILE - lo / camera::PIXEL_TILE + 1
-            };
-            rect_tiles += span(px.x, px.w) * span(px.y, px.h);
-            listed_tiles += listed.len() as u32;
+            let (columns, rows) = camera::tiles_over(px);
+            rect_tiles += columns.len() * rows.len();
+            listed_tiles += listed.len();
             checked += 1;
         }
     }

@@ -167,6 +167,15 @@ pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(PIXEL_TILE), height.div_ceil(PIXEL_TILE))
 }
 
+/// The columns and rows of the image's tiles that `rect` overlaps (empty for an empty rect).
+pub fn tiles_over(rect: Rect) -> (std::ops::Range<u32>, std::ops::Range<u32>) {
+    if rect.w == 0 || rect.h == 0 {
+        return (0..0, 0..0);
+    }
+    let span = |lo: u32, len: u32| lo / PIXEL_TILE..(lo + len - 1) / PIXEL_TILE + 1;
+    (span(rect.x, rect.w), span(rect.y, rect.h))
+}
+
 /// Per tile of [`PIXEL_TILE`]^2 pixels (row by row on the image's grid), for each of its rays'
 /// probes (in [`ray_probes`]' order), the texels the bilinear samples of the tile's seen
 /// pixels read, within the grid. Mirror of `probe_tiles_of_rays` (which reads the GPU's
@@ -230,11 +239,9 @@ pub fn select_tiles(
         (y0..=y1).any(|j| (x0..=x1).any(|i| height[(j * n + i) as usize] != 0.0))
     };
     let mut listed = Vec::new();
-    if pixel_rect.w == 0 || pixel_rect.h == 0 {
-        return listed;
-    }
-    for ty in pixel_rect.y / PIXEL_TILE..=(pixel_rect.y + pixel_rect.h - 1) / PIXEL_TILE {
-        for tx in pixel_rect.x / PIXEL_TILE..=(pixel_rect.x + pixel_rect.w - 1) / PIXEL_TILE {
+    let (columns, rows) = tiles_over(pixel_rect);
+    for ty in rows {
+        for tx in columns.clone() {
             let tile = ty * across + tx;
             if tiles[tile as usize].iter().any(|&r| moved(r)) {
                 listed.push(tile);

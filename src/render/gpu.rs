@@ -7,7 +7,7 @@
 //! Frames of a batch are recorded into one submission, each into its own slice of the
 //! output buffers, and read back together.
 
-use super::camera::{tile_grid, PIXEL_TILE};
+use super::camera::{tile_grid, tiles_over};
 use super::uniforms::{object_kind, FrameUniform, SensorUniform};
 use super::{
     contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press,
@@ -305,16 +305,6 @@ const PROBE_TILE_BYTES: u64 = 3 * 16;
 /// Invocations (tiles) per workgroup of `select_tiles`: one SIMD group on llvmpipe, so the
 /// tiles of a small rect still spread over the cores.
 const SELECT_TILES_WORKGROUP: u32 = 8;
-
-/// Tiles of the image's tile grid that `r` overlaps.
-fn tiles_over(r: Rect) -> u64 {
-    if r.w == 0 || r.h == 0 {
-        return 0;
-    }
-    let across = (r.x + r.w - 1) / PIXEL_TILE - r.x / PIXEL_TILE + 1;
-    let down = (r.y + r.h - 1) / PIXEL_TILE - r.y / PIXEL_TILE + 1;
-    across as u64 * down as u64
-}
 
 /// Pixels on a frame's touched list (both kinds), from its counters.
 fn touched_pixels(counters: &[u32]) -> u64 {
@@ -792,7 +782,11 @@ impl Renderer {
         let args = slot * DISPATCH_ARGS_BYTES;
         if self.list_tiles {
             let (r, bind) = span;
-            let g = groups(tiles_over(r) as u32, SELECT_TILES_WORKGROUP);
+            let (columns, rows) = tiles_over(r);
+            let g = groups(
+                columns.len() as u32 * rows.len() as u32,
+                SELECT_TILES_WORKGROUP,
+            );
             Self::dispatch(encoder, &p.select_tiles, bind, (g, 1));
             encoder.copy_buffer_to_buffer(
                 &self.counters,
