@@ -70,6 +70,29 @@ struct ReadFrames {
 /// One contact's penetration over its texel rect's rows, as read back.
 type PenetrationField = Vec<f32>;
 
+/// A compute dispatch's workgroups: a count, or the indirect arguments at a byte offset.
+enum Groups {
+    Direct((u32, u32)),
+    Indirect(u64),
+}
+
+impl Groups {
+    /// One invocation a texel or pixel of `r`, in [`WORKGROUP`]-square workgroups.
+    fn over(r: Rect) -> Self {
+        Groups::Direct((groups(r.w, WORKGROUP), groups(r.h, WORKGROUP)))
+    }
+}
+
+/// Where a frame's touched pixels can be: pixel rects (`pieces`, each with a bind group
+/// whose uniform holds it as its pixel rect) within `span` (its bind group's uniform holds
+/// it as its pixel rect, and as its texel rect the texels that can be displaced); `camera`
+/// is the bind group the touched pixels are cast with.
+struct Touched<'a> {
+    span: (Rect, &'a wgpu::BindGroup),
+    pieces: Vec<(Rect, &'a wgpu::BindGroup)>,
+    camera: &'a wgpu::BindGroup,
+}
+
 /// What [`Renderer::run`] gives back: each frame with how many texels its object pressed
 /// beyond the shell, and each contact's penetration field.
 struct Ran {
@@ -709,105 +732,138 @@ impl Renderer {
         bind: &wgpu::BindGroup,
         groups: (u32, u32),
     ) {
-        if groups.0 == 0 || groups.1 == 0 {
+        Self::record_pass(encoder, None, &[(pipeline, bind, Groups::Direct(groups))]);
+    }
+
+    /// Records `dispatches` in one compute pass (none without a dispatch that does work),
+    /// the indirect ones sized from `args` (`dispatch_args`). Why one pass for as many as the
+    /// copies between stages allow: lavapipe charges each pass of this renderer about 70 µs
+    /// beyond its dispatch (README, eighth round), a dispatch within a pass about 25 µs.
+    fn record_pass(
+        encoder: &mut wgpu::CommandEncoder,
+        args: Option<&wgpu::Buffer>,
+        dispatches: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, Groups)],
+    ) {
+        let works = |g: &Groups| !matches!(g, Groups::Direct((x, y)) if *x == 0 || *y == 0);
+        if !dispatches.iter().any(|(_, _, g)| works(g)) {
             return;
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: None,
             timestamp_writes: None,
         });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind, &[]);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        for (pipeline, bind, g) in dispatches.iter().filter(|(_, _, g)| works(g)) {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, *bind, &[]);
+            match (g, args) {
+                (Groups::Direct((x, y)), _) => pass.dispatch_workgroups(*x, *y, 1),
+                (Groups::Indirect(offset), Some(args)) => {
+                    pass.dispatch_workgroups_indirect(args, *offset)
+                }
+                // Every caller with an indirect dispatch passes `dispatch_args`.
+                (Groups::Indirect(_), None) => {}
+            }
+        }
     }
 
-    /// The same, with the workgroup count read from `dispatch_args` at `offset`.
-    fn dispatch_indirect(
+    /// What a contact frame runs once its height map is ready, in as few compute passes as
+    /// the copies between them allow: the skin normals over `normals` (texel rects with
+    /// their bind groups, and the rect of their map to refresh) beside the selection of
+    /// frame `slot`'s touched pixels from `touched`, then the passes over those.
+    fn record_after_height(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        pipeline: &wgpu::ComputePipeline,
-        bind: &wgpu::BindGroup,
-        offset: u64,
-    ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: None,
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind, &[]);
-        pass.dispatch_workgroups_indirect(&self.dispatch_args, offset);
-    }
-
-    /// Contact frame `slot`'s camera and LED stages: list the touched pixels of `rect`, size
-    /// the passes over them, and run those passes.
-    fn record_touched(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        bind: &wgpu::BindGroup,
         slot: u64,
-        rect: Rect,
+        normals: Option<(&[(Rect, &wgpu::BindGroup)], Rect)>,
+        touched: Option<&Touched>,
     ) {
-        self.record_select(encoder, slot, (rect, bind), &[(rect, bind)]);
-        self.record_touched_passes(encoder, bind, slot);
+        self.record_normals_and_select(encoder, slot, normals, touched);
+        if let Some(touched) = touched {
+            self.record_touched_passes(encoder, slot, touched.camera);
+        }
     }
 
-    /// Frame `slot`'s passes over its touched list: the shallow pixels', then the deep ones'.
-    fn record_touched_passes(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        bind: &wgpu::BindGroup,
-        slot: u64,
-    ) {
-        let args = slot * DISPATCH_ARGS_BYTES;
-        let p = &self.pipelines;
-        self.dispatch_indirect(encoder, &p.camera_shallow, bind, args);
-        self.dispatch_indirect(encoder, &p.camera_deep, bind, args + 16);
-    }
-
-    /// Frame `slot`'s touched list, and the copy of its passes' sizes to `dispatch_args`.
-    /// The pixels that can be touched lie in `pieces` (pixel rects, each with a bind group
-    /// whose uniform holds it as its pixel rect), all within `span` (its bind group's
-    /// uniform holds it as its pixel rect, and as its texel rect the texels that can be
-    /// displaced). With the tile list on, `select_tiles` lists the span's tiles whose probes
-    /// see displaced texels and `select_listed` runs over those alone; otherwise
+    /// The skin normals over `normals` (copied into their map over its rect) and frame
+    /// `slot`'s touched list from `touched`, both of which read the height map alone: one
+    /// pass holds the normals and the first step of the selection. With the tile list on,
+    /// `select_tiles` lists the span's tiles whose probes see displaced texels and
+    /// `select_listed` runs over those alone (its own pass, sized by the list); otherwise
     /// `select_touched` runs over every pixel of each piece.
-    fn record_select(
+    fn record_normals_and_select(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         slot: u64,
-        span: (Rect, &wgpu::BindGroup),
-        pieces: &[(Rect, &wgpu::BindGroup)],
+        normals: Option<(&[(Rect, &wgpu::BindGroup)], Rect)>,
+        touched: Option<&Touched>,
     ) {
         let p = &self.pipelines;
-        let args = slot * DISPATCH_ARGS_BYTES;
-        if self.list_tiles {
-            let (r, bind) = span;
-            let (columns, rows) = tiles_over(r);
-            let g = groups(
-                columns.len() as u32 * rows.len() as u32,
-                SELECT_TILES_WORKGROUP,
-            );
-            Self::dispatch(encoder, &p.select_tiles, bind, (g, 1));
+        let (normals, region) = match normals {
+            Some((n, region)) => (n, Some(region)),
+            None => (&[][..], None),
+        };
+        let mut first: Vec<(&wgpu::ComputePipeline, &wgpu::BindGroup, Groups)> = normals
+            .iter()
+            .map(|(t, bind)| (&p.skin_normals, *bind, Groups::over(*t)))
+            .collect();
+        if let Some(Touched { span, pieces, .. }) = touched {
+            if self.list_tiles {
+                let (columns, rows) = tiles_over(span.0);
+                let tiles = columns.len() as u32 * rows.len() as u32;
+                let g = (groups(tiles, SELECT_TILES_WORKGROUP), 1);
+                first.push((&p.select_tiles, span.1, Groups::Direct(g)));
+            } else {
+                first.extend(
+                    pieces
+                        .iter()
+                        .map(|(r, bind)| (&p.select_touched, *bind, Groups::over(*r))),
+                );
+            }
+        }
+        Self::record_pass(encoder, None, &first);
+        if region.is_some() {
+            self.copy_to_map(encoder, Map::Elastomer, region);
+        }
+        if let (Some(Touched { span, .. }), true) = (touched, self.list_tiles) {
+            let args = slot * DISPATCH_ARGS_BYTES + SELECT_ARGS_OFFSET;
             encoder.copy_buffer_to_buffer(
                 &self.counters,
                 slot * self.counter_bytes + SELECT_DISPATCH * 4,
                 &self.dispatch_args,
-                args + SELECT_ARGS_OFFSET,
+                args,
                 Some(12),
             );
-            self.dispatch_indirect(encoder, &p.select_listed, bind, args + SELECT_ARGS_OFFSET);
-        } else {
-            for (r, bind) in pieces {
-                let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
-                Self::dispatch(encoder, &p.select_touched, bind, g);
-            }
+            Self::record_pass(
+                encoder,
+                Some(&self.dispatch_args),
+                &[(&p.select_listed, span.1, Groups::Indirect(args))],
+            );
         }
+    }
+
+    /// Frame `slot`'s passes over its touched list, sized by it: the shallow pixels', then
+    /// the deep ones', in one pass.
+    fn record_touched_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: u64,
+        bind: &wgpu::BindGroup,
+    ) {
+        let args = slot * DISPATCH_ARGS_BYTES;
         encoder.copy_buffer_to_buffer(
             &self.counters,
             slot * self.counter_bytes + SHALLOW_DISPATCH * 4,
             &self.dispatch_args,
             args,
             Some(SELECT_ARGS_OFFSET),
+        );
+        let p = &self.pipelines;
+        Self::record_pass(
+            encoder,
+            Some(&self.dispatch_args),
+            &[
+                (&p.camera_shallow, bind, Groups::Indirect(args)),
+                (&p.camera_deep, bind, Groups::Indirect(args + 16)),
+            ],
         );
     }
 
@@ -917,9 +973,10 @@ impl Renderer {
         }
     }
 
-    /// A contact's heightfield stages: the penetration over `pressed`, then the elastomer's
-    /// two passes and the skin's normals over its texel rect `t`, each followed by the copy
-    /// of what it wrote into its map. `region` covers `t` and whatever the maps still hold
+    /// A contact's heightfield stages up to its height map: the penetration over `pressed`,
+    /// then the elastomer's two passes over its texel rect `t`, each followed by the copy of
+    /// what it wrote into its map (the skin's normals follow in
+    /// [`Self::record_after_height`]). `region` covers `t` and whatever the maps still hold
     /// from the last contact, so the maps are zero outside `t` afterwards.
     fn record_heightfield(
         &self,
@@ -932,7 +989,7 @@ impl Renderer {
         let contact = self.contact_pipeline(kind)?;
         self.record_texels(encoder, bind, contact, Map::Penetration, pressed, region);
         self.copy_field(encoder, pressed, field_offset);
-        for (_, pipeline, map) in self.elastomer_stages() {
+        for (_, pipeline, map) in self.blend_stages() {
             self.record_texels(encoder, bind, pipeline, map, t, region);
         }
         Ok(())
@@ -992,14 +1049,14 @@ impl Renderer {
             .collect()
     }
 
-    /// The heightfield stages after the contact stage (whose pipeline is its object's:
-    /// [`Self::contact_pipeline`]), in order: name, pipeline, and the map its output refreshes.
-    fn elastomer_stages(&self) -> [(&'static str, &wgpu::ComputePipeline, Map); 3] {
+    /// The heightfield stages between the contact stage (whose pipeline is its object's:
+    /// [`Self::contact_pipeline`]) and the skin normals, in order: name, pipeline, and the
+    /// map its output refreshes.
+    fn blend_stages(&self) -> [(&'static str, &wgpu::ComputePipeline, Map); 2] {
         let p = &self.pipelines;
         [
             ("elastomer: meridians", &p.blend_meridian, Map::Elastomer),
             ("elastomer: parallels", &p.blend_azimuth, Map::Height),
-            ("elastomer: skin normals", &p.skin_normals, Map::Elastomer),
         ]
     }
 
@@ -1271,6 +1328,7 @@ impl Renderer {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
             self.record_frame_start(&mut encoder, slot as u64, p.pixel_rect);
+            let mut normals = None;
             if let (Some(t), Some(pressed)) = (p.texel_rect, p.pressed_rect) {
                 let region = self.dirty.map_or(t, |d| d.union(&t));
                 self.clear_heightfield(&mut encoder, Some(region));
@@ -1282,10 +1340,15 @@ impl Renderer {
                     field_offsets[slot],
                 )?;
                 self.dirty = Some(t);
+                normals = Some(([(t, bind)], region));
             }
-            if let Some(r) = p.pixel_rect {
-                self.record_touched(&mut encoder, bind, slot as u64, r);
-            }
+            let touched = p.pixel_rect.map(|r| Touched {
+                span: (r, bind),
+                pieces: vec![(r, bind)],
+                camera: bind,
+            });
+            let normals = normals.as_ref().map(|(n, region)| (&n[..], *region));
+            self.record_after_height(&mut encoder, slot as u64, normals, touched.as_ref());
             if self.sensor.config.render.noise > 0.0 {
                 Self::dispatch(
                     &mut encoder,
@@ -1514,6 +1577,7 @@ impl Renderer {
             Clear,
             Contact(&'a wgpu::ComputePipeline),
             Texels(&'a wgpu::ComputePipeline, Map),
+            Normals,
             Select,
             Touched,
         }
@@ -1524,10 +1588,11 @@ impl Renderer {
                 Step::Contact(self.contact_pipeline(p.uniform.object_kind)?),
             ),
         ];
-        for (name, pipeline, map) in self.elastomer_stages() {
+        for (name, pipeline, map) in self.blend_stages() {
             stages.push((name, Step::Texels(pipeline, map)));
         }
         stages.extend([
+            ("elastomer: skin normals", Step::Normals),
             ("camera: select touched", Step::Select),
             ("camera + leds: touched pixels", Step::Touched),
         ]);
@@ -1549,14 +1614,26 @@ impl Renderer {
                     self.record_texels(encoder, &bind, pipeline, map, t, region);
                 }
             }
+            // A frame records the normals and the selection's first step in one pass; here
+            // each is timed on its own.
+            Step::Normals => {
+                if let (Some(t), Some(region)) = (p.texel_rect, region) {
+                    self.record_normals_and_select(encoder, 0, Some((&[(t, &bind)], region)), None);
+                }
+            }
             Step::Select => {
                 if let Some(r) = p.pixel_rect {
-                    self.record_select(encoder, 0, (r, &bind), &[(r, &bind)]);
+                    let touched = Touched {
+                        span: (r, &bind),
+                        pieces: vec![(r, &bind)],
+                        camera: &bind,
+                    };
+                    self.record_normals_and_select(encoder, 0, None, Some(&touched));
                 }
             }
             Step::Touched => {
                 if p.pixel_rect.is_some() {
-                    self.record_touched_passes(encoder, &bind, 0);
+                    self.record_touched_passes(encoder, 0, &bind);
                 }
             }
         };
@@ -1816,6 +1893,7 @@ impl Renderer {
         let span_bind = self.bind_group(&span_uniform, 0, None);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         self.record_frame_start(&mut encoder, 0, pixel_span);
+        let mut normals = None;
         if let Some(span) = texel_span {
             // The contact stage keeps the deepest penetration: it must start from zero, and
             // the maps must lose what the last frame left outside this one.
@@ -1831,21 +1909,27 @@ impl Renderer {
                 }
             }
             self.copy_to_map(&mut encoder, Map::Penetration, Some(region));
-            for (_, pipeline, map) in self.elastomer_stages() {
-                for (t, bind) in texel_pieces.iter().zip(&texel_binds) {
-                    let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
-                    Self::dispatch(&mut encoder, pipeline, bind, g);
-                }
+            for (_, pipeline, map) in self.blend_stages() {
+                let pieces: Vec<_> = texel_pieces
+                    .iter()
+                    .zip(&texel_binds)
+                    .map(|(t, bind)| (pipeline, bind, Groups::over(*t)))
+                    .collect();
+                Self::record_pass(&mut encoder, None, &pieces);
                 self.copy_to_map(&mut encoder, map, Some(region));
             }
             self.dirty = Some(span);
+            normals = Some(region);
         }
-        if let Some(span) = pixel_span {
-            let pieces: Vec<(Rect, &wgpu::BindGroup)> =
-                pixel_pieces.iter().copied().zip(&pixel_binds).collect();
-            self.record_select(&mut encoder, 0, (span, &span_bind), &pieces);
-            self.record_touched_passes(&mut encoder, &whole_bind, 0);
-        }
+        let texel_pieces: Vec<(Rect, &wgpu::BindGroup)> =
+            texel_pieces.iter().copied().zip(&texel_binds).collect();
+        let touched = pixel_span.map(|span| Touched {
+            span: (span, &span_bind),
+            pieces: pixel_pieces.iter().copied().zip(&pixel_binds).collect(),
+            camera: &whole_bind,
+        });
+        let normals = normals.map(|region| (&texel_pieces[..], region));
+        self.record_after_height(&mut encoder, 0, normals, touched.as_ref());
         if self.sensor.config.render.noise > 0.0 {
             Self::dispatch(
                 &mut encoder,
