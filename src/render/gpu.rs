@@ -727,21 +727,22 @@ impl Renderer {
     }
 
     fn dispatch(
+        &self,
         encoder: &mut wgpu::CommandEncoder,
         pipeline: &wgpu::ComputePipeline,
         bind: &wgpu::BindGroup,
         groups: (u32, u32),
     ) {
-        Self::record_pass(encoder, None, &[(pipeline, bind, Groups::Direct(groups))]);
+        self.record_pass(encoder, &[(pipeline, bind, Groups::Direct(groups))]);
     }
 
     /// Records `dispatches` in one compute pass (none without a dispatch that does work),
-    /// the indirect ones sized from `args` (`dispatch_args`). Why one pass for as many as the
-    /// copies between stages allow: lavapipe charges each pass of this renderer about 70 µs
-    /// beyond its dispatch (README, eighth round), a dispatch within a pass about 25 µs.
+    /// the indirect ones sized from `dispatch_args`. Why one pass for as many as the copies
+    /// between stages allow: lavapipe charges each pass of this renderer about 70 µs beyond
+    /// its dispatch (README, eighth round), a dispatch within a pass about 25 µs.
     fn record_pass(
+        &self,
         encoder: &mut wgpu::CommandEncoder,
-        args: Option<&wgpu::Buffer>,
         dispatches: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, Groups)],
     ) {
         let works = |g: &Groups| !matches!(g, Groups::Direct((x, y)) if *x == 0 || *y == 0);
@@ -755,13 +756,11 @@ impl Renderer {
         for (pipeline, bind, g) in dispatches.iter().filter(|(_, _, g)| works(g)) {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, *bind, &[]);
-            match (g, args) {
-                (Groups::Direct((x, y)), _) => pass.dispatch_workgroups(*x, *y, 1),
-                (Groups::Indirect(offset), Some(args)) => {
-                    pass.dispatch_workgroups_indirect(args, *offset)
+            match g {
+                Groups::Direct((x, y)) => pass.dispatch_workgroups(*x, *y, 1),
+                Groups::Indirect(offset) => {
+                    pass.dispatch_workgroups_indirect(&self.dispatch_args, *offset)
                 }
-                // Every caller with an indirect dispatch passes `dispatch_args`.
-                (Groups::Indirect(_), None) => {}
             }
         }
     }
@@ -819,7 +818,7 @@ impl Renderer {
                 );
             }
         }
-        Self::record_pass(encoder, None, &first);
+        self.record_pass(encoder, &first);
         if region.is_some() {
             self.copy_to_map(encoder, Map::Elastomer, region);
         }
@@ -832,9 +831,8 @@ impl Renderer {
                 args,
                 Some(12),
             );
-            Self::record_pass(
+            self.record_pass(
                 encoder,
-                Some(&self.dispatch_args),
                 &[(&p.select_listed, span.1, Groups::Indirect(args))],
             );
         }
@@ -857,9 +855,8 @@ impl Renderer {
             Some(SELECT_ARGS_OFFSET),
         );
         let p = &self.pipelines;
-        Self::record_pass(
+        self.record_pass(
             encoder,
-            Some(&self.dispatch_args),
             &[
                 (&p.camera_shallow, bind, Groups::Indirect(args)),
                 (&p.camera_deep, bind, Groups::Indirect(args + 16)),
@@ -1071,7 +1068,7 @@ impl Renderer {
         region: Rect,
     ) {
         let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
-        Self::dispatch(encoder, pipeline, bind, g);
+        self.dispatch(encoder, pipeline, bind, g);
         self.copy_to_map(encoder, map, Some(region));
     }
 
@@ -1088,7 +1085,7 @@ impl Renderer {
         }
         self.dirty = None;
         let (w, h) = (self.sensor.width, self.sensor.height);
-        Self::dispatch(
+        self.dispatch(
             &mut encoder,
             &self.pipelines.camera,
             &bind,
@@ -1096,7 +1093,7 @@ impl Renderer {
         );
         self.copy_probes_to_map(&mut encoder);
         let (tx, ty) = tile_grid(w, h);
-        Self::dispatch(
+        self.dispatch(
             &mut encoder,
             &self.pipelines.probe_tiles_of_rays,
             &bind,
@@ -1226,7 +1223,7 @@ impl Renderer {
             0,
             Some(self.slot_bytes),
         );
-        Self::dispatch(
+        self.dispatch(
             &mut encoder,
             &self.pipelines.add_noise,
             &bind,
@@ -1350,7 +1347,7 @@ impl Renderer {
             let normals = normals.as_ref().map(|(n, region)| (&n[..], *region));
             self.record_after_height(&mut encoder, slot as u64, normals, touched.as_ref());
             if self.sensor.config.render.noise > 0.0 {
-                Self::dispatch(
+                self.dispatch(
                     &mut encoder,
                     &self.pipelines.add_noise,
                     bind,
@@ -1714,7 +1711,7 @@ impl Renderer {
         let ub = self.uniform_buffer(&uniform);
         let bind = self.bind_group(&ub, 0, None);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        Self::dispatch(
+        self.dispatch(
             &mut encoder,
             &self.pipelines.unproject_pixels,
             &bind,
@@ -1904,7 +1901,7 @@ impl Renderer {
                 if let Some(r) = p.pressed_rect {
                     let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
                     let contact = self.contact_pipeline(p.uniform.object_kind)?;
-                    Self::dispatch(&mut encoder, contact, bind, g);
+                    self.dispatch(&mut encoder, contact, bind, g);
                     self.copy_field(&mut encoder, r, at);
                 }
             }
@@ -1915,7 +1912,7 @@ impl Renderer {
                     .zip(&texel_binds)
                     .map(|(t, bind)| (pipeline, bind, Groups::over(*t)))
                     .collect();
-                Self::record_pass(&mut encoder, None, &pieces);
+                self.record_pass(&mut encoder, &pieces);
                 self.copy_to_map(&mut encoder, map, Some(region));
             }
             self.dirty = Some(span);
@@ -1931,7 +1928,7 @@ impl Renderer {
         let normals = normals.map(|region| (&texel_pieces[..], region));
         self.record_after_height(&mut encoder, 0, normals, touched.as_ref());
         if self.sensor.config.render.noise > 0.0 {
-            Self::dispatch(
+            self.dispatch(
                 &mut encoder,
                 &self.pipelines.add_noise,
                 &whole_bind,
