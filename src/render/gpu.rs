@@ -86,7 +86,8 @@ impl Groups {
 /// Where a frame's touched pixels can be: pixel rects (`pieces`, each with a bind group
 /// whose uniform holds it as its pixel rect) within `span` (its bind group's uniform holds
 /// it as its pixel rect, and as its texel rect the texels that can be displaced); `camera`
-/// is the bind group the touched pixels are cast with.
+/// is the bind group the touched pixels are cast with. Only the selection without the tile
+/// list reads the pieces (a scene leaves them out when the list is on).
 struct Touched<'a> {
     span: (Rect, &'a wgpu::BindGroup),
     pieces: Vec<(Rect, &'a wgpu::BindGroup)>,
@@ -1874,8 +1875,10 @@ impl Renderer {
             .iter()
             .map(|u| self.bind_group(u, 0, None))
             .collect();
+        // Only the selection without the tile list runs over the pixel pieces one by one.
         let pixel_uniforms: Vec<wgpu::Buffer> = pixel_pieces
             .iter()
+            .filter(|_| !self.list_tiles)
             .map(|&r| self.uniform_buffer(&piece_uniform(None, Some(r))))
             .collect();
         let pixel_binds: Vec<wgpu::BindGroup> = pixel_uniforms
