@@ -218,13 +218,13 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = y * sensor.image_size.x + x;
     let ray = pixel_ray(vec2<f32>(f32(x), f32(y)));
     if ray.w == 0.0 {
-        write_pixel(i, vec3<f32>(0.0), 0.0);
+        write_pixel(vec2<u32>(x, y), vec3<f32>(0.0), 0.0);
         probes[PROBES_STRIDE * i + 1u] = vec4<f32>(0.0);
         return;
     }
     let dir = ray.xyz;
     let point = capsule_hit(dir, 0.0) * dir;
-    write_pixel(i, shade(point, normal_of_point(point), dir), 0.0);
+    write_pixel(vec2<u32>(x, y), shade(point, normal_of_point(point), dir), 0.0);
     let p = ray_probes(dir);
     probes[PROBES_STRIDE * i] = vec4<f32>(p.a, p.b);
     probes[PROBES_STRIDE * i + 1u] = vec4<f32>(p.c, p.t_in, p.t_out);
@@ -433,12 +433,11 @@ fn listed_pixel(k: u32, deep: bool) -> vec2<u32> {
 }
 
 fn write_hit(xy: vec2<u32>, hit: SkinHit) {
-    let pixel = xy.y * sensor.image_size.x + xy.x;
     if !hit.valid {
-        write_pixel(pixel, vec3<f32>(0.0), 0.0);
+        write_pixel(xy, vec3<f32>(0.0), 0.0);
         return;
     }
-    write_pixel(pixel, shade(hit.point, hit.normal, hit.ray), hit.indentation);
+    write_pixel(xy, shade(hit.point, hit.normal, hit.ray), hit.indentation);
 }
 
 // A contact frame, second pass: one invocation per shallow pixel, cast and shaded at once

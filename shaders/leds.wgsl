@@ -37,9 +37,10 @@ fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
     if textureLoad(probe_map, vec2<u32>(2u * id.x + 1u, id.y), 0).z == 0.0 {
         return;
     }
-    let v = image[i];
+    let at = image_index(id.xy);
+    let v = image[at];
     let n = sensor.noise * noise_samples(i, frame.noise_seed);
     let level = vec3<f32>(vec3<u32>(v, v >> 8u, v >> 16u) & vec3<u32>(255u)) + n;
     let out = vec3<u32>(clamp(round(level), vec3<f32>(0.0), vec3<f32>(255.0)));
-    image[i] = pack_rgba(out);
+    image[at] = pack_rgba(out);
 }

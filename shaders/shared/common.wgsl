@@ -73,9 +73,11 @@ struct Frame {
     // xyz: centre of voxel 0; w: voxel size (mm).
     grid_origin: vec4<f32>,
     noise_seed: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // The rect of the image the image and indentation buffers hold: its corner, and the
+    // pixels from one of its rows to the next (src/render/uniforms.rs image_pitch).
+    image_x: u32,
+    image_y: u32,
+    image_pitch: u32,
     pressed_rect: vec4<u32>,
 }
 

@@ -45,7 +45,14 @@ fn pack_rgba(c: vec3<u32>) -> u32 {
 
 // Pixel i's colour from the linear light `colour` (black beyond the lens) and the
 // indentation it sees.
-fn write_pixel(i: u32, colour: vec3<f32>, depth: f32) {
+fn write_pixel(xy: vec2<u32>, colour: vec3<f32>, depth: f32) {
+    let i = image_index(xy);
     image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
     indentation[i] = depth;
+}
+
+// Where pixel xy lies in the image and indentation buffers, which hold only the rect of the
+// image a frame can change (a contact frame copies, clears and reads back that much).
+fn image_index(xy: vec2<u32>) -> u32 {
+    return (xy.y - frame.image_y) * frame.image_pitch + (xy.x - frame.image_x);
 }

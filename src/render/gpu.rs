@@ -8,7 +8,7 @@
 //! output buffers, and read back together.
 
 use super::camera::{tile_grid, tiles_over};
-use super::uniforms::{object_kind, FrameUniform, SensorUniform};
+use super::uniforms::{image_pitch, object_kind, FrameUniform, SensorUniform};
 use super::{
     contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press,
     Rect,
@@ -246,13 +246,18 @@ pub struct Renderer {
     /// Per frame of a batch, the touched-list passes' workgroups (copied from `counters`:
     /// a buffer bound for storage cannot also feed an indirect dispatch).
     dispatch_args: wgpu::Buffer,
+    /// The empty finger's image as the reference frame's buffers held it (every pixel, rows
+    /// [`image_pitch`] apart), and as a texture, from which a contact frame copies the rect
+    /// it can change into its own buffers' layout.
     reference_image: wgpu::Buffer,
+    reference_texture: wgpu::Texture,
     /// Kept for reading batches back (a batch's images, indentation rows and counters).
     staging: wgpu::Buffer,
     empty_grid: wgpu::Buffer,
     /// Baked SDF grids of loaded meshes, by object (the Arc keeps the address unique).
     grids: HashMap<usize, (Arc<Object>, wgpu::Buffer)>,
-    /// Bytes of one frame's slice of `image` and `indentation` (256-aligned).
+    /// Bytes of one frame's slice of `image` and `indentation`: the whole image with rows
+    /// [`image_pitch`] apart (a contact frame's rect takes less).
     slot_bytes: u64,
     /// Bytes of one frame's slice of `counters`: the counters and the touched list.
     counter_bytes: u64,
@@ -424,7 +429,7 @@ impl Renderer {
         let grid = HeightfieldGrid::for_sensor(sensor);
         let texels = grid.texels as u64 * grid.texels as u64;
         let pixels = sensor.width as u64 * sensor.height as u64;
-        let slot_bytes = (pixels * 4).next_multiple_of(256);
+        let slot_bytes = sensor.height as u64 * image_pitch(sensor.width) as u64 * 4;
         let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
         let tiles = tiles_x as u64 * tiles_y as u64;
         // The counters, the touched list (a pixel each) and the tile list (a tile each).
@@ -610,6 +615,20 @@ impl Renderer {
                 mapped_at_creation: false,
             }),
             reference_image: storage(ctx, "geltip reference", slot_bytes, none),
+            reference_texture: ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("geltip reference texture"),
+                size: wgpu::Extent3d {
+                    width: sensor.width,
+                    height: sensor.height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Uint,
+                usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            }),
             staging: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("geltip batch readback"),
                 size: (2 * slot_bytes + COUNTER_HEADER_BYTES + texels * 4) * MAX_BATCH as u64,
@@ -1107,11 +1126,23 @@ impl Renderer {
             0,
             Some(self.slot_bytes),
         );
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.reference_image,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(image_pitch(w) * 4),
+                    rows_per_image: None,
+                },
+            },
+            self.reference_texture.as_image_copy(),
+            self.reference_texture.size(),
+        );
         self.ctx
             .submit_and_wait("rendering the reference frame", encoder)?;
         let render = start.elapsed();
         let pixels = (w * h) as usize;
-        let packed: Vec<u32> = read_buffer(self.ctx, &self.reference_image, 0, pixels)?;
+        let packed = self.read_whole_image(&self.reference_image)?;
         self.reference.rgba = bytemuck::cast_slice(&packed).to_vec();
         self.reference.indentation = vec![0.0; pixels];
         self.timings = Timings {
@@ -1122,6 +1153,18 @@ impl Renderer {
             listed_tiles: 0,
         };
         Ok(())
+    }
+
+    /// A whole image's pixels from the start of `buffer` (rows [`image_pitch`] apart there).
+    fn read_whole_image(&self, buffer: &wgpu::Buffer) -> Result<Vec<u32>> {
+        let (w, h) = (self.sensor.width as usize, self.sensor.height as usize);
+        let pitch = image_pitch(self.sensor.width) as usize;
+        let pitched: Vec<u32> = read_buffer(self.ctx, buffer, 0, h * pitch)?;
+        Ok(pitched
+            .chunks_exact(pitch)
+            .flat_map(|row| &row[..w])
+            .copied()
+            .collect())
     }
 
     fn prepare(&mut self, press: &Press, noise_seed: u32) -> Result<Prepared> {
@@ -1232,7 +1275,7 @@ impl Renderer {
         );
         self.ctx
             .submit_and_wait("rendering an empty frame", encoder)?;
-        let packed: Vec<u32> = read_buffer(self.ctx, &self.image, 0, (w * h) as usize)?;
+        let packed = self.read_whole_image(&self.image)?;
         Ok(Frame {
             width: w,
             height: h,
@@ -1315,7 +1358,7 @@ impl Renderer {
         let (w, h) = (self.sensor.width, self.sensor.height);
         let uniforms: Vec<wgpu::Buffer> = prepared
             .iter()
-            .map(|p| self.uniform_buffer(&p.uniform))
+            .map(|p| self.uniform_buffer(&p.uniform.holding(self.changed_rect(p.pixel_rect))))
             .collect();
         let binds: Vec<wgpu::BindGroup> = prepared
             .iter()
@@ -1356,16 +1399,16 @@ impl Renderer {
                 );
             }
         }
-        let rows: Vec<(u64, u64)> = prepared
+        let rects: Vec<Option<Rect>> = prepared
             .iter()
-            .map(|p| self.changed_rows(p.pixel_rect))
+            .map(|p| self.changed_rect(p.pixel_rect))
             .collect();
         let field_ranges: Vec<Option<(u64, u64)>> = prepared
             .iter()
             .zip(&field_offsets)
             .map(|(p, &at)| p.field_range(at, self.grid.texels))
             .collect();
-        let read = self.read_frames("rendering contacts", encoder, &rows, &field_ranges)?;
+        let read = self.read_frames("rendering contacts", encoder, &rects, &field_ranges)?;
         let rendered = read.mapped;
         timings.render += rendered - start;
         let fields = read.fields;
@@ -1393,25 +1436,47 @@ impl Renderer {
         Ok(Ran { frames, fields })
     }
 
-    /// Frame `slot`'s start: the reference's pixels over the rows `pixel_rect` can change,
-    /// zero indentation there, and zero counters (the touched list itself needs no
-    /// clearing: only the places its counts hold are read).
+    /// Frame `slot`'s start: its image buffers hold the rect of the image it can change
+    /// (`pixel_rect`'s, or every pixel with noise: [`Self::changed_rect`]), the reference's
+    /// pixels there and zero indentation; and zero counters (the touched list itself needs
+    /// no clearing: only the places its counts hold are read).
     fn record_frame_start(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         slot: u64,
         pixel_rect: Option<Rect>,
     ) {
-        let (start, count) = self.changed_rows(pixel_rect);
-        let offset = slot * self.slot_bytes + start * 4;
-        encoder.copy_buffer_to_buffer(
-            &self.reference_image,
-            start * 4,
-            &self.image,
-            offset,
-            Some(count * 4),
-        );
-        encoder.clear_buffer(&self.indentation, offset, Some(count * 4));
+        if let Some(r) = self.changed_rect(pixel_rect) {
+            let offset = slot * self.slot_bytes;
+            let row_bytes = image_pitch(r.w) * 4;
+            encoder.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.reference_texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: r.x,
+                        y: r.y,
+                        z: 0,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.image,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset,
+                        bytes_per_row: Some(row_bytes),
+                        rows_per_image: None,
+                    },
+                },
+                wgpu::Extent3d {
+                    width: r.w,
+                    height: r.h,
+                    depth_or_array_layers: 1,
+                },
+            );
+            let bytes = r.h as u64 * row_bytes as u64;
+            encoder.clear_buffer(&self.indentation, offset, Some(bytes));
+        }
         encoder.clear_buffer(
             &self.counters,
             slot * self.counter_bytes,
@@ -1419,27 +1484,31 @@ impl Renderer {
         );
     }
 
-    /// The pixels a contact frame can change, as (first pixel, pixels): the rows of its
-    /// pixel rect, or every pixel when the sensor adds noise. The rest of the frame is the
-    /// reference's, which the CPU keeps, so only these rows are copied, cleared and read.
-    fn changed_rows(&self, pixel_rect: Option<Rect>) -> (u64, u64) {
-        let w = self.sensor.width;
+    /// The rect of the image a contact frame can change: its pixel rect, or every pixel when
+    /// the sensor adds noise. The rest of the frame is the reference's, which the CPU keeps,
+    /// so only this rect is copied, cleared and read back (its rows [`image_pitch`] apart).
+    fn changed_rect(&self, pixel_rect: Option<Rect>) -> Option<Rect> {
         if self.sensor.config.render.noise > 0.0 {
-            return (0, w as u64 * self.sensor.height as u64);
+            return Some(Rect {
+                x: 0,
+                y: 0,
+                w: self.sensor.width,
+                h: self.sensor.height,
+            });
         }
-        pixel_rect.map_or((0, 0), |r| ((r.y * w) as u64, (r.h * w) as u64))
+        pixel_rect.filter(|r| r.w > 0 && r.h > 0)
     }
 
-    /// Submits `encoder` (the work that renders frames `0..rows.len()` of a batch) with the
+    /// Submits `encoder` (the work that renders frames `0..rects.len()` of a batch) with the
     /// copies that read them back appended, waits once and unpacks: per frame, its image and
-    /// its indentation (read over `rows`; the reference's image and zero elsewhere), and its
-    /// counters; then the contacts' penetration fields over `fields` (byte ranges of
-    /// `penetration_fields`; an empty field for `None`).
+    /// its indentation (read over its rect, which its buffers hold; the reference's image
+    /// and zero elsewhere), and its counters; then the contacts' penetration fields over
+    /// `fields` (byte ranges of `penetration_fields`; an empty field for `None`).
     fn read_frames(
         &self,
         what: &str,
         mut encoder: wgpu::CommandEncoder,
-        rows: &[(u64, u64)],
+        rects: &[Option<Rect>],
         fields: &[Option<(u64, u64)>],
     ) -> Result<ReadFrames> {
         enum Part {
@@ -1452,11 +1521,12 @@ impl Renderer {
             Incomplete,
         }
         let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> =
-            Vec::with_capacity(3 * rows.len() + fields.len());
-        for (k, &(start, count)) in rows.iter().enumerate() {
+            Vec::with_capacity(3 * rects.len() + fields.len());
+        for (k, rect) in rects.iter().enumerate() {
             let slot = k as u64 * self.slot_bytes;
-            ranges.push((&self.image, slot + start * 4, count * 4));
-            ranges.push((&self.indentation, slot + start * 4, count * 4));
+            let bytes = rect.map_or(0, |r| r.h as u64 * image_pitch(r.w) as u64 * 4);
+            ranges.push((&self.image, slot, bytes));
+            ranges.push((&self.indentation, slot, bytes));
             ranges.push((
                 &self.counters,
                 k as u64 * self.counter_bytes,
@@ -1466,8 +1536,9 @@ impl Renderer {
         for &(offset, bytes) in fields.iter().map(|f| f.as_ref().unwrap_or(&(0, 0))) {
             ranges.push((&self.penetration_fields, offset, bytes));
         }
-        let frame_ranges = 3 * rows.len();
-        let pixels = self.sensor.width as usize * self.sensor.height as usize;
+        let frame_ranges = 3 * rects.len();
+        let width = self.sensor.width as usize;
+        let pixels = width * self.sensor.height as usize;
         // The copies ride in the submission of the work they read: one round trip. (The
         // kept staging buffer holds a full batch; a scene of very many contacts may need
         // more for its fields.)
@@ -1477,9 +1548,9 @@ impl Renderer {
         record_ranges(&mut encoder, staging, &ranges)?;
         let submission = self.ctx.submit(what, encoder)?;
         // Each frame's image and indentation as the reference's pixels and zeros, laid out
-        // while the GPU works: this thread would only wait, and after the wait only the rows
-        // read are left to copy over them.
-        let (mut images, mut indentations): (Vec<_>, Vec<_>) = rows
+        // while the GPU works: this thread would only wait, and after the wait only the
+        // rects read are left to copy over them.
+        let (mut images, mut indentations): (Vec<_>, Vec<_>) = rects
             .iter()
             .map(|_| {
                 (
@@ -1494,32 +1565,56 @@ impl Renderer {
             if k >= frame_ranges {
                 return Part::Field(bytemuck::pod_collect_to_vec(bytes));
             }
-            let (frame, start) = (k / 3, rows[k / 3].0 as usize);
-            match k % 3 {
-                0 => match images[frame].take() {
-                    Some(mut rgba) if start * 4 + bytes.len() <= rgba.len() => {
-                        rgba[start * 4..start * 4 + bytes.len()].copy_from_slice(bytes);
+            let frame = k / 3;
+            // The rect's rows, each `pitch` pixels of the bytes read, into the frame's rows.
+            let rows = |pixel_bytes: usize| -> Option<Vec<(usize, std::ops::Range<usize>)>> {
+                let Some(r) = rects[frame] else {
+                    return Some(Vec::new());
+                };
+                let (x, y, w) = (r.x as usize, r.y as usize, r.w as usize);
+                let pitch = image_pitch(r.w) as usize * pixel_bytes;
+                if x + w > width || (y + r.h as usize) * width > pixels {
+                    return None;
+                }
+                Some(
+                    (0..r.h as usize)
+                        .map(|j| ((y + j) * width + x, j * pitch..j * pitch + w * pixel_bytes))
+                        .collect(),
+                )
+            };
+            match (k % 3, rows(4)) {
+                (0, Some(rows)) => match images[frame].take() {
+                    Some(mut rgba) => {
+                        for (at, from) in rows {
+                            let n = from.len();
+                            rgba[at * 4..at * 4 + n].copy_from_slice(&bytes[from]);
+                        }
                         Part::Rgba(rgba)
                     }
-                    _ => Part::Incomplete,
+                    None => Part::Incomplete,
                 },
-                1 => match indentations[frame].take() {
-                    Some(mut indentation) if start + bytes.len() / 4 <= indentation.len() => {
-                        for (depth, b) in indentation[start..].iter_mut().zip(bytes.chunks_exact(4))
-                        {
-                            *depth = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+                (1, Some(rows)) => match indentations[frame].take() {
+                    Some(mut indentation) => {
+                        for (at, from) in rows {
+                            for (depth, b) in indentation[at..]
+                                .iter_mut()
+                                .zip(bytes[from].chunks_exact(4))
+                            {
+                                *depth = f32::from_ne_bytes([b[0], b[1], b[2], b[3]]);
+                            }
                         }
                         Part::Indentation(indentation)
                     }
-                    _ => Part::Incomplete,
+                    None => Part::Incomplete,
                 },
-                _ => Part::Counters(bytemuck::pod_collect_to_vec(bytes)),
+                (2, _) => Part::Counters(bytemuck::pod_collect_to_vec(bytes)),
+                _ => Part::Incomplete,
             }
         })?;
-        let mut frames = Vec::with_capacity(rows.len());
+        let mut frames = Vec::with_capacity(rects.len());
         let mut out_fields = Vec::with_capacity(fields.len());
         let mut parts = parts.into_iter();
-        while frames.len() < rows.len() {
+        while frames.len() < rects.len() {
             match (parts.next(), parts.next(), parts.next()) {
                 (
                     Some(Part::Rgba(rgba)),
@@ -1565,7 +1660,7 @@ impl Renderer {
     /// CPU either way.
     pub fn profile_stages(&mut self, contact: &Contact) -> Result<Vec<(&'static str, Duration)>> {
         let p = self.prepare(&Press::from(contact), 0)?;
-        let uniform = self.uniform_buffer(&p.uniform);
+        let uniform = self.uniform_buffer(&p.uniform.holding(self.changed_rect(p.pixel_rect)));
         let bind = self.bind_group(&uniform, 0, Some(&p.press.object));
         let region = match (self.dirty, p.texel_rect) {
             (Some(d), Some(t)) => Some(d.union(&t)),
@@ -1677,7 +1772,7 @@ impl Renderer {
         self.read_frames(
             "profile readback",
             encoder,
-            &[self.changed_rows(p.pixel_rect)],
+            &[self.changed_rect(p.pixel_rect)],
             &[],
         )?;
         out.push(("readback", start.elapsed()));
@@ -1852,8 +1947,11 @@ impl Renderer {
         let render_start = Instant::now();
         let (w, h) = (self.sensor.width, self.sensor.height);
         let texel_span = texel_pieces.iter().copied().reduce(|a, b| a.union(&b));
+        // The pixels the scene can change (every pixel with noise), as `run` has per contact.
+        let pixel_span = pixel_pieces.iter().copied().reduce(|a, b| a.union(&b));
+        let holding = self.changed_rect(pixel_span);
         let piece_uniform = |t: Option<Rect>, r: Option<Rect>| {
-            let mut u = prepared[0].uniform;
+            let mut u = prepared[0].uniform.holding(holding);
             u.texel_rect = t.map_or([0; 4], |t| [t.x, t.y, t.w, t.h]);
             u.pixel_rect = r.map_or([0; 4], |r| [r.x, r.y, r.w, r.h]);
             u
@@ -1887,8 +1985,6 @@ impl Renderer {
             .collect();
         let whole_uniform = self.uniform_buffer(&piece_uniform(None, None));
         let whole_bind = self.bind_group(&whole_uniform, 0, None);
-        // The rows the scene can change (every row with noise), as `run` does per contact.
-        let pixel_span = pixel_pieces.iter().copied().reduce(|a, b| a.union(&b));
         let span_uniform = self.uniform_buffer(&piece_uniform(texel_span, pixel_span));
         let span_bind = self.bind_group(&span_uniform, 0, None);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
@@ -1943,8 +2039,8 @@ impl Renderer {
             .zip(&field_offsets)
             .map(|(p, &at)| p.field_range(at, self.grid.texels))
             .collect();
-        let rows = [self.changed_rows(pixel_span)];
-        let read = self.read_frames("rendering a scene", encoder, &rows, &field_ranges)?;
+        let rects = [self.changed_rect(pixel_span)];
+        let read = self.read_frames("rendering a scene", encoder, &rects, &field_ranges)?;
         let rendered = read.mapped;
         timings.render = rendered - render_start;
         let fields = read.fields;

@@ -70,7 +70,10 @@ pub struct FrameUniform {
     pub grid_dims: [u32; 3],
     pub grid_origin: [f32; 4],
     pub noise_seed: u32,
-    pub _pad: [u32; 3],
+    /// The rect of the image the frame's image and indentation buffers hold: its corner and
+    /// the pixels from one of its rows to the next ([`image_pitch`] of its width).
+    pub image_origin: [u32; 2],
+    pub image_pitch: u32,
     /// The texels the contact stage traces: those the object can press.
     pub pressed_rect: [u32; 4],
 }
@@ -174,6 +177,12 @@ pub fn object_kind(object: &Object) -> u32 {
     }
 }
 
+/// Pixels from one row of a frame's image buffers to the next, for a rect `width` pixels
+/// wide: a whole number of 256-byte rows, as copies between buffers and textures need.
+pub fn image_pitch(width: u32) -> u32 {
+    width.next_multiple_of(64)
+}
+
 impl FrameUniform {
     /// The reference frame: no contact, every pixel.
     pub fn reference(sensor: &Sensor, noise_seed: u32) -> Self {
@@ -181,8 +190,22 @@ impl FrameUniform {
             pixel_rect: [0, 0, sensor.width, sensor.height],
             object_kind: REFERENCE_FRAME,
             noise_seed,
+            image_pitch: image_pitch(sensor.width),
             ..Zeroable::zeroed()
         }
+    }
+
+    /// The same frame with its image buffers holding `rect` of the image (nothing without).
+    pub fn holding(mut self, rect: Option<Rect>) -> Self {
+        let r = rect.unwrap_or(Rect {
+            x: 0,
+            y: 0,
+            w: 0,
+            h: 0,
+        });
+        self.image_origin = [r.x, r.y];
+        self.image_pitch = image_pitch(r.w);
+        self
     }
 
     /// A contact pressing `pressed_rect` and moving `texel_rect`, re-rendering `pixel_rect`.
@@ -225,7 +248,8 @@ impl FrameUniform {
             grid_dims: dims,
             grid_origin,
             noise_seed,
-            _pad: [0; 3],
+            image_origin: [0; 2],
+            image_pitch: 0,
             pressed_rect: rect4(footprint.map(|f| f.pressed)),
         }
     }
