@@ -343,6 +343,21 @@ fn touched_pixels(counters: &[u32]) -> u64 {
 /// Two vec4 per pixel (shaders/shared/common.wgsl `PROBES_STRIDE`).
 const PROBES_BYTES_PER_PIXEL: u64 = 2 * 16;
 
+/// Where a copy to or from `texture` starts for `rect`: its corner (the copy's extent is the
+/// rect's size).
+fn rect_of(texture: &wgpu::Texture, rect: Rect) -> wgpu::TexelCopyTextureInfo<'_> {
+    wgpu::TexelCopyTextureInfo {
+        texture,
+        mip_level: 0,
+        origin: wgpu::Origin3d {
+            x: rect.x,
+            y: rect.y,
+            z: 0,
+        },
+        aspect: wgpu::TextureAspect::All,
+    }
+}
+
 fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -936,16 +951,7 @@ impl Renderer {
                     rows_per_image: None,
                 },
             },
-            wgpu::TexelCopyTextureInfo {
-                texture: &target.texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: r.x,
-                    y: r.y,
-                    z: 0,
-                },
-                aspect: wgpu::TextureAspect::All,
-            },
+            rect_of(&target.texture, r),
             wgpu::Extent3d {
                 width: r.w,
                 height: r.h,
@@ -1450,16 +1456,7 @@ impl Renderer {
             let offset = slot * self.slot_bytes;
             let row_bytes = image_pitch(r.w) * 4;
             encoder.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &self.reference_texture,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d {
-                        x: r.x,
-                        y: r.y,
-                        z: 0,
-                    },
-                    aspect: wgpu::TextureAspect::All,
-                },
+                rect_of(&self.reference_texture, r),
                 wgpu::TexelCopyBufferInfo {
                     buffer: &self.image,
                     layout: wgpu::TexelCopyBufferLayout {
