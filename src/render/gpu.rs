@@ -246,10 +246,8 @@ pub struct Renderer {
     /// Per frame of a batch, the touched-list passes' workgroups (copied from `counters`:
     /// a buffer bound for storage cannot also feed an indirect dispatch).
     dispatch_args: wgpu::Buffer,
-    /// The empty finger's image as the reference frame's buffers held it (every pixel, rows
-    /// [`image_pitch`] apart), and as a texture, from which a contact frame copies the rect
-    /// it can change into its own buffers' layout.
-    reference_image: wgpu::Buffer,
+    /// The empty finger's image, from which a frame copies the rect it can change into its
+    /// own buffers' layout ([`Self::copy_reference`]).
     reference_texture: wgpu::Texture,
     /// Kept for reading batches back (a batch's images, indentation rows and counters).
     staging: wgpu::Buffer,
@@ -342,6 +340,12 @@ fn touched_pixels(counters: &[u32]) -> u64 {
 
 /// Two vec4 per pixel (shaders/shared/common.wgsl `PROBES_STRIDE`).
 const PROBES_BYTES_PER_PIXEL: u64 = 2 * 16;
+
+/// Bytes a frame's image (or indentation) buffer takes to hold rect `r` of the image: its
+/// rows, [`image_pitch`] pixels apart.
+fn held_bytes(r: Rect) -> u64 {
+    r.h as u64 * image_pitch(r.w) as u64 * 4
+}
 
 /// Where a copy to or from `texture` starts for `rect`: its corner (the copy's extent is the
 /// rect's size).
@@ -444,7 +448,12 @@ impl Renderer {
         let grid = HeightfieldGrid::for_sensor(sensor);
         let texels = grid.texels as u64 * grid.texels as u64;
         let pixels = sensor.width as u64 * sensor.height as u64;
-        let slot_bytes = sensor.height as u64 * image_pitch(sensor.width) as u64 * 4;
+        let slot_bytes = held_bytes(Rect {
+            x: 0,
+            y: 0,
+            w: sensor.width,
+            h: sensor.height,
+        });
         let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
         let tiles = tiles_x as u64 * tiles_y as u64;
         // The counters, the touched list (a pixel each) and the tile list (a tile each).
@@ -629,7 +638,6 @@ impl Renderer {
                 usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
-            reference_image: storage(ctx, "geltip reference", slot_bytes, none),
             reference_texture: ctx.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("geltip reference texture"),
                 size: wgpu::Extent3d {
@@ -1093,8 +1101,7 @@ impl Renderer {
         t: Rect,
         region: Rect,
     ) {
-        let g = (groups(t.w, WORKGROUP), groups(t.h, WORKGROUP));
-        self.dispatch(encoder, pipeline, bind, g);
+        self.record_pass(encoder, &[(pipeline, bind, Groups::over(t))]);
         self.copy_to_map(encoder, map, Some(region));
     }
 
@@ -1125,16 +1132,9 @@ impl Renderer {
             &bind,
             (groups(tx * ty, 64), 1),
         );
-        encoder.copy_buffer_to_buffer(
-            &self.image,
-            0,
-            &self.reference_image,
-            0,
-            Some(self.slot_bytes),
-        );
         encoder.copy_buffer_to_texture(
             wgpu::TexelCopyBufferInfo {
-                buffer: &self.reference_image,
+                buffer: &self.image,
                 layout: wgpu::TexelCopyBufferLayout {
                     offset: 0,
                     bytes_per_row: Some(image_pitch(w) * 4),
@@ -1148,7 +1148,7 @@ impl Renderer {
             .submit_and_wait("rendering the reference frame", encoder)?;
         let render = start.elapsed();
         let pixels = (w * h) as usize;
-        let packed = self.read_whole_image(&self.reference_image)?;
+        let packed = self.read_whole_image(&self.image)?;
         self.reference.rgba = bytemuck::cast_slice(&packed).to_vec();
         self.reference.indentation = vec![0.0; pixels];
         self.timings = Timings {
@@ -1266,13 +1266,7 @@ impl Renderer {
         let bind = self.bind_group(&uniform, 0, None);
         let (w, h) = (self.sensor.width, self.sensor.height);
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(
-            &self.reference_image,
-            0,
-            &self.image,
-            0,
-            Some(self.slot_bytes),
-        );
+        self.copy_reference(&mut encoder, 0, self.whole_image());
         self.dispatch(
             &mut encoder,
             &self.pipelines.add_noise,
@@ -1454,25 +1448,8 @@ impl Renderer {
     ) {
         if let Some(r) = self.changed_rect(pixel_rect) {
             let offset = slot * self.slot_bytes;
-            let row_bytes = image_pitch(r.w) * 4;
-            encoder.copy_texture_to_buffer(
-                rect_of(&self.reference_texture, r),
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &self.image,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset,
-                        bytes_per_row: Some(row_bytes),
-                        rows_per_image: None,
-                    },
-                },
-                wgpu::Extent3d {
-                    width: r.w,
-                    height: r.h,
-                    depth_or_array_layers: 1,
-                },
-            );
-            let bytes = r.h as u64 * row_bytes as u64;
-            encoder.clear_buffer(&self.indentation, offset, Some(bytes));
+            self.copy_reference(encoder, offset, r);
+            encoder.clear_buffer(&self.indentation, offset, Some(held_bytes(r)));
         }
         encoder.clear_buffer(
             &self.counters,
@@ -1481,17 +1458,43 @@ impl Renderer {
         );
     }
 
+    /// The reference's pixels over `r` into `image` from byte `offset`, rows
+    /// [`image_pitch`] apart: a frame's buffers' layout for that rect.
+    fn copy_reference(&self, encoder: &mut wgpu::CommandEncoder, offset: u64, r: Rect) {
+        encoder.copy_texture_to_buffer(
+            rect_of(&self.reference_texture, r),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.image,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset,
+                    bytes_per_row: Some(image_pitch(r.w) * 4),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::Extent3d {
+                width: r.w,
+                height: r.h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// Every pixel of the image, as a rect.
+    fn whole_image(&self) -> Rect {
+        Rect {
+            x: 0,
+            y: 0,
+            w: self.sensor.width,
+            h: self.sensor.height,
+        }
+    }
+
     /// The rect of the image a contact frame can change: its pixel rect, or every pixel when
     /// the sensor adds noise. The rest of the frame is the reference's, which the CPU keeps,
     /// so only this rect is copied, cleared and read back (its rows [`image_pitch`] apart).
     fn changed_rect(&self, pixel_rect: Option<Rect>) -> Option<Rect> {
         if self.sensor.config.render.noise > 0.0 {
-            return Some(Rect {
-                x: 0,
-                y: 0,
-                w: self.sensor.width,
-                h: self.sensor.height,
-            });
+            return Some(self.whole_image());
         }
         pixel_rect.filter(|r| r.w > 0 && r.h > 0)
     }
@@ -1521,7 +1524,7 @@ impl Renderer {
             Vec::with_capacity(3 * rects.len() + fields.len());
         for (k, rect) in rects.iter().enumerate() {
             let slot = k as u64 * self.slot_bytes;
-            let bytes = rect.map_or(0, |r| r.h as u64 * image_pitch(r.w) as u64 * 4);
+            let bytes = rect.map_or(0, held_bytes);
             ranges.push((&self.image, slot, bytes));
             ranges.push((&self.indentation, slot, bytes));
             ranges.push((
