@@ -374,17 +374,14 @@ fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
     if !moved {
         return;
     }
-    // One workgroup of select_listed per tile: g tiles as min(g, TOUCHED_MAX_GROUPS) x
-    // ceil(g / TOUCHED_MAX_GROUPS) x 1 workgroups.
+    // One workgroup of select_listed per tile.
     let e = atomicAdd(&counters[TILE_COUNT], 1u);
-    atomicMax(&counters[SELECT_DISPATCH], min(e + 1u, TOUCHED_MAX_GROUPS));
-    atomicMax(&counters[SELECT_DISPATCH + 1u], e / TOUCHED_MAX_GROUPS + 1u);
-    atomicStore(&counters[SELECT_DISPATCH + 2u], 1u);
+    grow_dispatch(SELECT_DISPATCH, e);
     atomicStore(&counters[TOUCHED_LIST + list_capacity() + e], tile);
 }
 
 // select_touched over the listed tiles, one workgroup each, within the pixel rect (a tile on
-// the rect's edge reaches past it, and the frame reads back and restores only its rows).
+// the rect's edge reaches past it, and the frame's buffers hold its rect alone).
 @compute @workgroup_size(8, 8)
 fn select_listed(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
     let e = group.y * TOUCHED_MAX_GROUPS + group.x;
@@ -413,17 +410,21 @@ fn list_capacity() -> u32 {
 
 // Takes the next place of a kind of touched pixel (its count at word `count`) and keeps the
 // dispatch over that kind (at word `dispatch`) large enough: the first pixel of each
-// workgroup's share sizes it, G groups in all as min(G, TOUCHED_MAX_GROUPS) x
-// ceil(G / TOUCHED_MAX_GROUPS) x 1.
+// workgroup's share sizes it.
 fn list_touched(count: u32, dispatch: u32) -> u32 {
     let k = atomicAdd(&counters[count], 1u);
     if k % TOUCHED_WORKGROUP == 0u {
-        let g = k / TOUCHED_WORKGROUP;
-        atomicMax(&counters[dispatch], min(g + 1u, TOUCHED_MAX_GROUPS));
-        atomicMax(&counters[dispatch + 1u], g / TOUCHED_MAX_GROUPS + 1u);
-        atomicStore(&counters[dispatch + 2u], 1u);
+        grow_dispatch(dispatch, k / TOUCHED_WORKGROUP);
     }
     return k;
+}
+
+// Makes the indirect dispatch at word `dispatch` reach workgroup g: G groups in all as
+// min(G, TOUCHED_MAX_GROUPS) x ceil(G / TOUCHED_MAX_GROUPS) x 1.
+fn grow_dispatch(dispatch: u32, g: u32) {
+    atomicMax(&counters[dispatch], min(g + 1u, TOUCHED_MAX_GROUPS));
+    atomicMax(&counters[dispatch + 1u], g / TOUCHED_MAX_GROUPS + 1u);
+    atomicStore(&counters[dispatch + 2u], 1u);
 }
 
 // The pixel at place k of the touched list's shallow (front) or deep (back) part.
