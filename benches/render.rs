@@ -1,6 +1,7 @@
 //! Renderer throughput at the paper sensor's 640x480, printed as a table:
 //! `cargo bench --bench render` (add `-- --frames N` for more frames per pass, `-- --sensor
-//! <preset|file.toml>` for another sensor).
+//! <preset|file.toml>` for another sensor; `-- --host-phases N` prints only one contact per
+//! submit over N passes, by the host's speed before each).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission (and the same without the tile list, passes in
@@ -13,8 +14,13 @@
 //! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps. Then
 //! the stages of a contact frame, the tiles the tile list kept, and what the device charges
-//! whatever the work: an empty submission, and a dispatch of one workgroup.
+//! whatever the work: an empty submission, and a dispatch of one workgroup. The host's speed
+//! (`geltip::gpu::HostSpeed`: a fixed loop's ms on all cores) is timed before every pass,
+//! its value for a row's median pass in the `host ms` column, and printed at the start and
+//! at the end: shared machines run faster and slower by phases, so a row is only comparable
+//! with another beside the same host speed.
 
+use geltip::gpu::HostSpeed;
 use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::{Object, Solid};
@@ -30,12 +36,14 @@ fn contacts(n: usize) -> Vec<Contact> {
     all.iter().cycle().take(n).cloned().collect()
 }
 
-/// One measured pass: frames, wall time and the renderer's split.
+/// One measured pass: frames, wall time and the renderer's split, and the host's speed just
+/// before it.
 #[derive(Clone, Copy)]
 struct Pass {
     frames: usize,
     wall: Duration,
     t: Timings,
+    host: HostSpeed,
 }
 
 impl Pass {
@@ -44,7 +52,8 @@ impl Pass {
     }
 }
 
-/// Prints the median pass of `passes` (by fps), with the slowest and fastest pass's fps.
+/// Prints the median pass of `passes` (by fps), with the slowest and fastest pass's fps, and
+/// the host's speed before the median pass (the fixed loop on all cores, ms).
 fn row(name: &str, passes: &mut [Pass]) {
     passes.sort_by(|a, b| a.fps().total_cmp(&b.fps()));
     let p = passes[passes.len() / 2];
@@ -55,7 +64,7 @@ fn row(name: &str, passes: &mut [Pass]) {
         passes[passes.len() - 1].fps()
     );
     println!(
-        "| {name:<28} | {:>6} | {:>8.1} | {range:>9} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.0} |",
+        "| {name:<28} | {:>6} | {:>8.1} | {range:>9} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.0} | {:>7.2} |",
         p.frames,
         p.fps(),
         per(p.wall),
@@ -63,6 +72,7 @@ fn row(name: &str, passes: &mut [Pass]) {
         per(p.t.render),
         per(p.t.readback),
         p.t.touched_pixels as f64 / p.frames as f64,
+        p.host.all_cores_ms,
     );
 }
 
@@ -88,7 +98,7 @@ fn with_and_without_tile_list(
 }
 
 /// Runs `f` (which renders `frames` frames and returns the renderer's timings) `repeat`
-/// times.
+/// times, each after timing the host's speed.
 fn passes(
     repeat: usize,
     frames: usize,
@@ -96,15 +106,64 @@ fn passes(
 ) -> anyhow::Result<Vec<Pass>> {
     (0..repeat)
         .map(|_| {
+            let host = HostSpeed::measure();
             let start = Instant::now();
             let t = f()?;
             Ok(Pass {
                 frames,
                 wall: start.elapsed(),
                 t,
+                host,
             })
         })
         .collect()
+}
+
+/// `--host-phases N`: N passes of one contact per submit, each after timing the host's
+/// speed, as a table of fps by host speed (the fixed loop on all cores, ms): how much of a
+/// run's spread is the host's, and the rate at the host's full speed (its fastest bins).
+fn host_phases(r: &mut Renderer, list: &[Contact], n: usize) -> anyhow::Result<()> {
+    let mut all = passes(n, list.len(), || {
+        let mut t = Timings::default();
+        for c in list {
+            r.render(c)?;
+            t.add(&r.timings());
+        }
+        Ok(t)
+    })?;
+    all.sort_by(|a, b| a.host.all_cores_ms.total_cmp(&b.host.all_cores_ms));
+    println!(
+        "one contact per submit by the host's speed before each pass ({n} passes of {} frames)",
+        list.len()
+    );
+    println!("| host ms | passes | fps median | fps range |");
+    println!("|---------|--------|------------|-----------|");
+    // Bins of a tenth of the fastest host time each.
+    let fastest = all[0].host.all_cores_ms;
+    let mut rest = &mut all[..];
+    while !rest.is_empty() {
+        let lo = rest[0].host.all_cores_ms;
+        let bin = ((lo - fastest) / (0.1 * fastest)).floor();
+        let hi = fastest * (1.0 + 0.1 * (bin + 1.0));
+        let k = rest
+            .iter()
+            .take_while(|p| p.host.all_cores_ms < hi)
+            .count()
+            .max(1);
+        let (here, later) = rest.split_at_mut(k);
+        here.sort_by(|a, b| a.fps().total_cmp(&b.fps()));
+        println!(
+            "| {:.1}-{:.1} | {:>6} | {:>10.1} | {:>4.0}-{:<4.0} |",
+            fastest * (1.0 + 0.1 * bin),
+            hi,
+            here.len(),
+            here[here.len() / 2].fps(),
+            here[0].fps(),
+            here[here.len() - 1].fps()
+        );
+        rest = later;
+    }
+    Ok(())
 }
 
 fn arg<T: std::str::FromStr>(args: &[String], name: &str) -> anyhow::Result<Option<T>>
@@ -135,6 +194,9 @@ fn main() -> anyhow::Result<()> {
     let repeat: usize = arg(&args, "--repeat")?.unwrap_or(5).max(1);
     let sensor_arg: String = arg(&args, "--sensor")?.unwrap_or_else(|| "paper".to_string());
     let sensor = Sensor::load(&sensor_arg)?;
+    // Before anything else runs: the host's speed now (and again at the end), so that rows
+    // from different runs, or hosts, can be told apart from the host's own phases.
+    let speed_before = HostSpeed::measure();
     let start = Instant::now();
     let mut r = Renderer::new(&sensor)?;
     let startup = start.elapsed();
@@ -158,8 +220,9 @@ fn main() -> anyhow::Result<()> {
         contact_pipelines.as_secs_f64(),
         if kept { "kept" } else { "returned to the kernel" }
     );
+    println!("{speed_before} (at the start)");
     println!(
-        "| {:<28} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} |",
+        "| {:<28} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>7} |",
         "what",
         "frames",
         "fps",
@@ -168,11 +231,12 @@ fn main() -> anyhow::Result<()> {
         "prepare",
         "render",
         "readback",
-        "touched"
+        "touched",
+        "host ms"
     );
     println!(
-        "|{:-<30}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|",
-        "", "", "", "", "", "", "", "", ""
+        "|{:-<30}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->9}|",
+        "", "", "", "", "", "", "", "", "", ""
     );
 
     let n_ref = (frames / 8).max(4);
@@ -187,6 +251,9 @@ fn main() -> anyhow::Result<()> {
     row("no contact, full ray cast", &mut reference);
 
     let list = contacts(frames);
+    if let Some(n) = arg::<usize>(&args, "--host-phases")? {
+        return host_phases(&mut r, &list, n.max(1));
+    }
     let (mut single, mut unlisted) = with_and_without_tile_list(&mut r, repeat, frames, |r| {
         let mut t = Timings::default();
         for c in &list {
@@ -343,7 +410,9 @@ fn main() -> anyhow::Result<()> {
         64.0 * per_frame(|t| t.listed_tiles),
         per_frame(|t| t.touched_pixels)
     );
-    device_overhead(geltip::gpu::GpuContext::shared()?)
+    device_overhead(geltip::gpu::GpuContext::shared()?)?;
+    println!("{} (at the end)", HostSpeed::measure());
+    Ok(())
 }
 
 /// What the device charges whatever the work: a submission with nothing in it, and each
