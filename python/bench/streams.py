@@ -26,6 +26,7 @@ def main():
     for sim in sims.values():
         sim.render_batch(batch[:3 * geltip.MAX_BATCH])  # every stream's pipelines built
     for r in range(args.rounds):
+        print(f"round {r + 1}: host loop {geltip.host_speed()['all_cores_ms']:.1f} ms on all cores")
         for n, sim in sims.items():
             start = time.perf_counter()
             sim.render_batch(batch)

@@ -133,6 +133,11 @@ def localise(
 def load_image(path: _Path) -> _Image:
     """Reads an image file (PNG) as (H, W, 3) uint8."""
 
+def host_speed() -> Dict[str, float]:
+    """How fast the host's cores run now: {"one_core_ms", "all_cores_ms"}, a fixed scalar
+    loop's milliseconds on one core and on all cores at once (best of three; some 35 ms).
+    Shared machines run faster and slower by phases: time it beside a speed figure."""
+
 def keep_freed_memory() -> bool:
     """Asks the C allocator (glibc) to keep freed memory for reuse: every frame's fresh
     image buffers are then not page-faulted in again (1.0-1.4 ms a 640x480 frame on a 2-core

@@ -1324,6 +1324,18 @@ fn keep_freed_memory() -> bool {
     geltip::memory::keep_freed_memory()
 }
 
+/// How fast the host's cores run now (`geltip::gpu::HostSpeed`): a fixed scalar loop's
+/// milliseconds on one core and on all cores at once, the best of three tries (some 35 ms).
+/// Shared machines run faster and slower by phases; time it beside a speed figure.
+#[pyfunction]
+fn host_speed(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let speed = py.detach(geltip::gpu::HostSpeed::measure);
+    let d = PyDict::new(py);
+    d.set_item("one_core_ms", speed.one_core_ms)?;
+    d.set_item("all_cores_ms", speed.all_cores_ms)?;
+    Ok(d)
+}
+
 #[pymodule]
 fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Sensor>()?;
@@ -1331,6 +1343,7 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(localise, m)?)?;
     m.add_function(wrap_pyfunction!(load_image, m)?)?;
     m.add_function(wrap_pyfunction!(keep_freed_memory, m)?)?;
+    m.add_function(wrap_pyfunction!(host_speed, m)?)?;
     m.add("MAX_BATCH", MAX_BATCH)?;
     m.add("REGION_NONE", REGION_NONE)?;
     m.add("REGION_HEMISPHERE", REGION_HEMISPHERE)?;

@@ -291,6 +291,16 @@ def test_mesh_object_matches_cli(sensor, cli, tmp_path):
         geltip.Simulator(sensor, objects=[3])
 
 
+def test_host_speed_times_the_loop():
+    """Two positive, finite times, the all-cores one no shorter than a tenth of the
+    one-core one (the loop runs on each core at least once)."""
+    speed = geltip.host_speed()
+    assert set(speed) == {"one_core_ms", "all_cores_ms"}
+    for v in speed.values():
+        assert isinstance(v, float) and 0.0 < v < 60_000.0
+    assert speed["all_cores_ms"] > 0.1 * speed["one_core_ms"]
+
+
 def test_keep_freed_memory_applies_on_glibc():
     """The allocator setting applies on glibc Linux (False elsewhere), in a fresh process
     (it is process-wide), and rendering works after it."""

@@ -126,7 +126,18 @@ pub(crate) fn one_line(text: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::one_line;
+    use super::{one_line, HostSpeed};
+
+    #[test]
+    fn host_speed_times_the_loop_on_one_core_and_on_all() {
+        let speed = HostSpeed::measure();
+        for ms in [speed.one_core_ms, speed.all_cores_ms] {
+            assert!(ms.is_finite() && ms > 0.0, "{speed:?}");
+        }
+        let line = speed.to_string();
+        assert!(line.starts_with("host speed: a fixed loop "), "{line}");
+        assert!(line.contains(" ms on one core, ") && line.ends_with(" ms on all at once"));
+    }
 
     #[test]
     fn one_line_flattens_nested_errors() {
