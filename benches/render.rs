@@ -119,18 +119,31 @@ fn passes(
         .collect()
 }
 
+/// Renders each of `items` with `render` (whose frames are dropped at once), summing the
+/// renderer's timings of each call.
+fn each<T, U>(
+    r: &mut Renderer,
+    items: impl IntoIterator<Item = T>,
+    mut render: impl FnMut(&mut Renderer, T) -> geltip::Result<U>,
+) -> anyhow::Result<Timings> {
+    let mut t = Timings::default();
+    for item in items {
+        render(r, item)?;
+        t.add(&r.timings());
+    }
+    Ok(t)
+}
+
+/// One contact per submission, each of `list` in turn.
+fn one_per_submit(r: &mut Renderer, list: &[Contact]) -> anyhow::Result<Timings> {
+    each(r, list, |r, c| r.render(c))
+}
+
 /// `--host-phases N`: N passes of one contact per submit, each after timing the host's
 /// speed, as a table of fps by host speed (the fixed loop on all cores, ms): how much of a
 /// run's spread is the host's, and the rate at the host's full speed (its fastest bins).
 fn host_phases(r: &mut Renderer, list: &[Contact], n: usize) -> anyhow::Result<()> {
-    let mut all = passes(n, list.len(), || {
-        let mut t = Timings::default();
-        for c in list {
-            r.render(c)?;
-            t.add(&r.timings());
-        }
-        Ok(t)
-    })?;
+    let mut all = passes(n, list.len(), || one_per_submit(r, list))?;
     all.sort_by(|a, b| a.host.all_cores_ms.total_cmp(&b.host.all_cores_ms));
     println!(
         "one contact per submit by the host's speed before each pass ({n} passes of {} frames)",
@@ -163,6 +176,22 @@ fn host_phases(r: &mut Renderer, list: &[Contact], n: usize) -> anyhow::Result<(
         );
         rest = later;
     }
+    // How closely the rate follows the host: Pearson's correlation of fps with the loop's
+    // speed (1 / its ms), over every pass.
+    let pairs: Vec<(f64, f64)> = all
+        .iter()
+        .map(|p| (p.fps(), 1.0 / p.host.all_cores_ms))
+        .collect();
+    let mean = |f: fn(&(f64, f64)) -> f64| pairs.iter().map(f).sum::<f64>() / pairs.len() as f64;
+    let (mx, my) = (mean(|p| p.0), mean(|p| p.1));
+    let sum = |f: &dyn Fn(&(f64, f64)) -> f64| pairs.iter().map(f).sum::<f64>();
+    let cov = sum(&|p| (p.0 - mx) * (p.1 - my));
+    let spread = (sum(&|p| (p.0 - mx).powi(2)) * sum(&|p| (p.1 - my).powi(2))).sqrt();
+    println!(
+        "correlation of fps with the host's speed (1 / host ms) over the {} passes: {:.2}",
+        pairs.len(),
+        if spread > 0.0 { cov / spread } else { 0.0 }
+    );
     Ok(())
 }
 
@@ -241,12 +270,7 @@ fn main() -> anyhow::Result<()> {
 
     let n_ref = (frames / 8).max(4);
     let mut reference = passes(repeat, n_ref, || {
-        let mut t = Timings::default();
-        for _ in 0..n_ref {
-            r.render_reference()?;
-            t.add(&r.timings());
-        }
-        Ok(t)
+        each(&mut r, 0..n_ref, |r, _| r.render_reference())
     })?;
     row("no contact, full ray cast", &mut reference);
 
@@ -254,14 +278,8 @@ fn main() -> anyhow::Result<()> {
     if let Some(n) = arg::<usize>(&args, "--host-phases")? {
         return host_phases(&mut r, &list, n.max(1));
     }
-    let (mut single, mut unlisted) = with_and_without_tile_list(&mut r, repeat, frames, |r| {
-        let mut t = Timings::default();
-        for c in &list {
-            r.render(c)?;
-            t.add(&r.timings());
-        }
-        Ok(t)
-    })?;
+    let (mut single, mut unlisted) =
+        with_and_without_tile_list(&mut r, repeat, frames, |r| one_per_submit(r, &list))?;
     row("one contact per submit", &mut single);
     row("  the same, no tile list", &mut unlisted);
 
@@ -273,17 +291,9 @@ fn main() -> anyhow::Result<()> {
     second.ready_objects(&solids)?;
     let mut two_streams = passes(repeat, frames, || {
         let (a, b) = list.split_at(list.len() / 2);
-        let run = |renderer: &mut Renderer, part: &[Contact]| -> anyhow::Result<Timings> {
-            let mut t = Timings::default();
-            for c in part {
-                renderer.render(c)?;
-                t.add(&renderer.timings());
-            }
-            Ok(t)
-        };
         let (ta, tb) = std::thread::scope(|scope| {
-            let other = scope.spawn(|| run(&mut second, b));
-            let mine = run(&mut r, a);
+            let other = scope.spawn(|| one_per_submit(&mut second, b));
+            let mine = one_per_submit(&mut r, a);
             (mine, other.join())
         });
         let mut t = ta?;
@@ -295,12 +305,9 @@ fn main() -> anyhow::Result<()> {
     // A streaming consumer: each batch's frames are dropped before the next (keeping all of
     // them would time the allocator's fresh pages, not the renderer).
     let mut batched = passes(repeat, frames, || {
-        let mut t = Timings::default();
-        for batch in list.chunks(MAX_BATCH) {
-            r.render_batch(batch)?;
-            t.add(&r.timings());
-        }
-        Ok(t)
+        each(&mut r, list.chunks(MAX_BATCH), |r, batch| {
+            r.render_batch(batch)
+        })
     })?;
     row(&format!("batches of {MAX_BATCH} contacts"), &mut batched);
 
@@ -317,22 +324,14 @@ fn main() -> anyhow::Result<()> {
         })
         .collect();
     let mut one_scene = passes(repeat, frames, || {
-        let mut t = Timings::default();
-        for p in &ones {
-            r.render_scene(std::slice::from_ref(p))?;
-            t.add(&r.timings());
-        }
-        Ok(t)
+        each(&mut r, &ones, |r, p| {
+            r.render_scene(std::slice::from_ref(p))
+        })
     })?;
     row("one contact per scene", &mut one_scene);
     let (mut two_scene, mut two_unlisted) =
         with_and_without_tile_list(&mut r, repeat, frames, |r| {
-            let mut t = Timings::default();
-            for pair in &twins {
-                r.render_scene(pair)?;
-                t.add(&r.timings());
-            }
-            Ok(t)
+            each(r, &twins, |r, pair| r.render_scene(pair))
         })?;
     row("two contacts per scene", &mut two_scene);
     row("  the same, no tile list", &mut two_unlisted);
