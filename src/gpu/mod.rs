@@ -46,11 +46,12 @@ pub fn host_description(adapter: &wgpu::AdapterInfo) -> String {
 /// updated 100 times, each element through a call to libm's fused multiply-add; about 5 ms
 /// on this project's machine at full speed) takes on one core, and on every core at once
 /// (until the slowest is done), the best of three tries each. Why: shared virtual machines
-/// slow down by phases, with no steal time to show for it. On this project's 2-core machine
-/// the loop on both cores took 5.1 ms in one minute and 7-8 ms in the next, and one contact
-/// per submit rendered at 220-240 fps beside the first and 130-165 beside the second, so a
-/// speed figure means little without this one beside it. (A vectorised loop, bound by
-/// cache bandwidth, did not follow those phases.)
+/// slow down by phases, with no steal time to show for it, and the renderer with them; on
+/// this project's 2-core machine the loop on both cores takes under 5.3 ms at full speed and
+/// 6-8 ms in slow phases (`cargo bench --bench render -- --host-phases 100` prints fps by it),
+/// so a speed figure means little without this one beside it. (The loop is scalar and
+/// latency-bound on purpose: a vectorised one, bound by cache bandwidth, did not follow those
+/// phases.)
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HostSpeed {
     /// Milliseconds for the loop on one core.
