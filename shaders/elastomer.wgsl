@@ -46,18 +46,7 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
     elastomer_scratch[j * sensor.texels + i] = vec4<f32>(narrow, wide, 0.0, 0.0);
 }
 
-// Walks the parallel through disc position u one tap at a time, rotating it by the tap's
-// turn (cos, sin of step / rho): the first tap is `taps` turns back (no sine or cosine of the
-// azimuth at all).
-fn parallel_start(u: vec2<f32>, turn: vec2<f32>, taps: i32) -> vec2<f32> {
-    let back = vec2<f32>(turn.x, -turn.y);
-    var p = u;
-    for (var k = 0; k < taps; k++) {
-        p = rotate(p, back);
-    }
-    return p;
-}
-
+// u turned by (cos, sin) of an angle about the disc's centre.
 fn rotate(u: vec2<f32>, turn: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(u.x * turn.x - u.y * turn.y, u.x * turn.y + u.y * turn.x);
 }
@@ -79,21 +68,29 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     let pen = textureLoad(penetration_map, texel, 0).x;
     var v = textureLoad(elastomer_map, texel, 0).xy;
     if rho > 1e-6 {
+        // The centre taps are this texel's own blends (v); the others walk out from it both
+        // ways, a turn of the parallel at a time.
+        var narrow = sensor.blend_weights[0].x * v.x;
         let n_step = sensor.narrow_step_mm;
         let n_turn = vec2<f32>(cos(n_step / rho), sin(n_step / rho));
-        var u = parallel_start(here, n_turn, NARROW_TAPS);
-        var narrow = 0.0;
-        for (var k = -NARROW_TAPS; k <= NARROW_TAPS; k++) {
-            narrow += sensor.blend_weights[abs(k)].x * sample_map_x(elastomer_map, texel_of(u));
-            u = rotate(u, n_turn);
+        var ahead = here;
+        var behind = here;
+        for (var k = 1; k <= NARROW_TAPS; k++) {
+            ahead = rotate(ahead, n_turn);
+            behind = rotate(behind, vec2<f32>(n_turn.x, -n_turn.y));
+            narrow += sensor.blend_weights[k].x
+                * (sample_map_x(elastomer_map, texel_of(ahead)) + sample_map_x(elastomer_map, texel_of(behind)));
         }
+        var wide = sensor.blend_weights[0].y * v.y;
         let w_step = sensor.wide_step_mm;
         let w_turn = vec2<f32>(cos(w_step / rho), sin(w_step / rho));
-        u = parallel_start(here, w_turn, WIDE_TAPS);
-        var wide = 0.0;
-        for (var k = -WIDE_TAPS; k <= WIDE_TAPS; k++) {
-            wide += sensor.blend_weights[abs(k)].y * sample_map_y(elastomer_map, texel_of(u));
-            u = rotate(u, w_turn);
+        ahead = here;
+        behind = here;
+        for (var k = 1; k <= WIDE_TAPS; k++) {
+            ahead = rotate(ahead, w_turn);
+            behind = rotate(behind, vec2<f32>(w_turn.x, -w_turn.y));
+            wide += sensor.blend_weights[k].y
+                * (sample_map_y(elastomer_map, texel_of(ahead)) + sample_map_y(elastomer_map, texel_of(behind)));
         }
         v = vec2<f32>(narrow, wide);
     }
