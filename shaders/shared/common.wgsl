@@ -81,11 +81,12 @@ struct Frame {
     pressed_rect: vec4<u32>,
 }
 
-// The sensor's lens model, ray steps and kernel taps (the Sensor uniform's lens_model,
-// ray_steps, narrow_taps and wide_taps, which the shaders do not read) as pipeline constants, set when
-// the renderer builds its pipelines (SensorUniform::pipeline_constants): the driver folds the
-// lens switch and knows the loops' trip counts (callgrind: 1.2% fewer instructions a
-// contact frame on lavapipe). The defaults are the paper sensor's.
+// The sensor's lens model, ray steps, kernel taps and shading exponents (the Sensor
+// uniform's lens_model, ray_steps, narrow_taps, wide_taps, spread and shininess, which the
+// shaders do not read) as pipeline constants, set when the renderer builds its pipelines
+// (SensorUniform::pipeline_constants): the driver folds the lens switch and knows the loops'
+// trip counts (callgrind: 1.2% fewer instructions a contact frame on lavapipe). The defaults
+// are the paper sensor's.
 override LENS_MODEL: u32 = 1u;
 override RAY_STEPS: u32 = 4u;
 override NARROW_TAPS: i32 = 3;
@@ -93,6 +94,10 @@ override WIDE_TAPS: i32 = 3;
 // Whether the wide kernel's taps lie on every other narrow tap (its step exactly twice the
 // narrow one's, as on the paper sensor): the meridians pass then samples those places once.
 override WIDE_TAPS_NESTED: bool = true;
+// The LEDs' emission exponent and the paint's shininess: whole exponents are multiplied out
+// (shared/shading.wgsl power).
+override LED_SPREAD: f32 = 2.0;
+override PAINT_SHININESS: f32 = 24.0;
 
 const GRID_OBJECT: u32 = 100u;
 // object_kind of the reference frame (no object; every pixel is shaded).

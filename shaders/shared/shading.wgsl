@@ -4,12 +4,30 @@
 // G-buffer round trip, whose loads and stores llvmpipe makes lane by lane. Mirror:
 // src/render/leds.rs.
 
+// x^e for x >= 0. A whole exponent up to 255 (the paper sensor's are 2 and 24) is multiplied
+// out by squaring: the exponents are pipeline constants (LED_SPREAD, PAINT_SHININESS), so the
+// driver unrolls the loop, folds the bit tests and keeps only the multiplies, where pow is
+// exp2(e log2 x), two polynomials on llvmpipe. Other exponents take pow.
+fn power(x: f32, e: f32) -> f32 {
+    if e != floor(e) || e < 0.0 || e > 255.0 {
+        return pow(x, e);
+    }
+    var n = u32(e);
+    var result = 1.0;
+    var square = x;
+    for (var k = 0u; k < 8u; k++) {
+        if (n & 1u) != 0u {
+            result *= square;
+        }
+        square *= square;
+        n = n >> 1u;
+    }
+    return result;
+}
+
 // Relative emission towards unit direction `towards`: the LEDs shine up the finger (+z).
 fn emission(towards: vec3<f32>) -> f32 {
-    if sensor.spread == 0.0 {
-        return 1.0;
-    }
-    return pow(max(towards.z, 0.0), sensor.spread);
+    return power(max(towards.z, 0.0), LED_SPREAD);
 }
 
 fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
@@ -28,7 +46,7 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
         let d = dist / sensor.falloff_mm;
         let falloff = emission(-l) / (1.0 + d * d);
         let half_vector = normalize(l + view);
-        let spec = pow(max(dot(facing, half_vector), 0.0), sensor.shininess);
+        let spec = power(max(dot(facing, half_vector), 0.0), PAINT_SHININESS);
         colour += sensor.led_colour[i].xyz * (sensor.intensity * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
     }
     return colour;

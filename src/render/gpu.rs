@@ -216,7 +216,7 @@ pub struct Renderer {
     contact_pipelines: HashMap<u32, wgpu::ComputePipeline>,
     /// What those are built with: the renderer's pipeline layout and the sensor's constants.
     pipeline_layout: wgpu::PipelineLayout,
-    constants: [(&'static str, f64); 5],
+    constants: [(&'static str, f64); 7],
     layout: wgpu::BindGroupLayout,
     sensor_buffer: wgpu::Buffer,
     penetration: wgpu::Buffer,

@@ -154,9 +154,9 @@ impl SensorUniform {
     }
 
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
-    /// fields that shape control flow, fixed per sensor so the driver can fold the lens
-    /// switch and unroll the loops.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 5] {
+    /// fields that shape control flow, and the shading's exponents, fixed per sensor so the
+    /// driver can fold the lens switch, unroll the loops and multiply whole powers out.
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 7] {
         // Nested exactly as the shader steps them: the wide step twice the narrow one in f32.
         let nested = self.wide_step_mm == 2.0 * self.narrow_step_mm;
         [
@@ -165,6 +165,8 @@ impl SensorUniform {
             ("NARROW_TAPS", self.narrow_taps as f64),
             ("WIDE_TAPS", self.wide_taps as f64),
             ("WIDE_TAPS_NESTED", if nested { 1.0 } else { 0.0 }),
+            ("LED_SPREAD", self.spread as f64),
+            ("PAINT_SHININESS", self.shininess as f64),
         ]
     }
 }
