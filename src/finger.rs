@@ -118,7 +118,7 @@ impl Finger {
 
     /// The surface point at arc length `s` along the meridian of azimuth phi, given as its
     /// cosine and sine.
-    fn point_towards(&self, s: f64, cos_phi: f64, sin_phi: f64) -> SurfacePoint {
+    pub(crate) fn point_towards(&self, s: f64, cos_phi: f64, sin_phi: f64) -> SurfacePoint {
         let (r, d) = (self.radius, self.cylinder_length);
         if s <= self.junction_s() {
             let beta = s / r;

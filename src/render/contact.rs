@@ -180,7 +180,7 @@ impl Bounds {
 /// finger, such as a bulge, the direction is what matters), and whether the lens sees it;
 /// a direction beyond the lens gets the pixel on the lens's edge at its azimuth.
 fn pixel_towards(sensor: &Sensor, p: DVec3) -> (DVec2, bool) {
-    let lateral = p.x.hypot(p.y);
+    let lateral = (p.x * p.x + p.y * p.y).sqrt();
     let theta = lateral.atan2(p.z);
     let seen = theta <= sensor.lens.max_theta;
     let rho = sensor.lens.project(theta.min(sensor.lens.max_theta));
@@ -298,6 +298,9 @@ pub fn footprint(
         0.5 * f.shell_thickness,
         f.shell_thickness,
     ];
+    // The eight directions the boundary cells grow in, as (sine, cosine).
+    let directions: [(f64, f64); 8] =
+        std::array::from_fn(|k| (k as f64 * std::f64::consts::FRAC_PI_4).sin_cos());
     // Per row of cells, then merged: the bounds of the grown boundary cells on the disc and
     // in the image (min and max do not depend on the order, so neither does the result).
     let row_bounds = |cj: i64| {
@@ -312,29 +315,23 @@ pub fn footprint(
             }
             let c = SurfaceCoord::from_disc(centre(ci as u32, cj as u32));
             let rho = parallel_radius(f, c.s);
-            let mut around: Vec<SurfaceCoord> = (0..8)
-                .map(|k| {
-                    let (sin, cos) = (k as f64 * std::f64::consts::FRAC_PI_4).sin_cos();
-                    SurfaceCoord {
-                        s: (c.s + grow * cos).max(0.0),
-                        phi: c.phi + grow * sin / rho.max(1e-9),
-                    }
-                })
-                .collect();
+            let grown = directions.iter().map(|&(sin, cos)| SurfaceCoord {
+                s: (c.s + grow * cos).max(0.0),
+                phi: c.phi + grow * sin / rho.max(1e-9),
+            });
             // Near the tip the parallels are too small for azimuth offsets: take the whole
             // circle the grown cell can reach.
-            if c.s < 2.0 * grow {
-                around.extend((0..16).map(|k| SurfaceCoord {
-                    s: c.s + grow,
-                    phi: k as f64 * std::f64::consts::TAU / 16.0,
-                }));
-            }
-            around.push(c);
-            for p in around {
-                let disc = p.to_disc();
+            let circle = (0..if c.s < 2.0 * grow { 16 } else { 0 }).map(|k| SurfaceCoord {
+                s: c.s + grow,
+                phi: k as f64 * std::f64::consts::TAU / 16.0,
+            });
+            for p in grown.chain(circle).chain([c]) {
+                // One sine and cosine of the azimuth for both the disc position and the point.
+                let (sin_phi, cos_phi) = p.phi.sin_cos();
+                let disc = p.s * DVec2::new(cos_phi, sin_phi);
                 b.disc_lo = b.disc_lo.min(disc);
                 b.disc_hi = b.disc_hi.max(disc);
-                let sp = f.point_at(p);
+                let sp = f.point_towards(p.s, cos_phi, sin_phi);
                 for depth in depths {
                     // Samples beyond the lens count at its edge: where the imprint runs out
                     // of view, what is seen of it reaches the edge (a short arc, inside the
