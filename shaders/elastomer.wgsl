@@ -14,11 +14,13 @@ fn sample_penetration(t: vec2<f32>) -> f32 {
 
 @compute @workgroup_size(8, 8)
 fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
+    // Over the meridian rect alone: beyond the kernels' reach of every pressed texel the
+    // blends are zero, as the frame's clear left them.
+    if id.x >= frame.meridian_rect.z || id.y >= frame.meridian_rect.w {
         return;
     }
-    let i = frame.texel_rect.x + id.x;
-    let j = frame.texel_rect.y + id.y;
+    let i = frame.meridian_rect.x + id.x;
+    let j = frame.meridian_rect.y + id.y;
     let u = texel_centre(i, j);
     var dir = vec2<f32>(1.0, 0.0);
     if length(u) > 0.0 {

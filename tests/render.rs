@@ -470,6 +470,23 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
                 i >= r.x && i < r.x + r.w && j >= r.y && j < r.y + r.h
             };
             let inside = |i: u32, j: u32| within(t, i, j);
+            // The meridians pass runs over fp.meridians alone: every blend along a meridian
+            // that is not zero lies there.
+            let mut blended = 0;
+            for j in 0..n {
+                for i in 0..n {
+                    let v = meridian[(j * n + i) as usize];
+                    if v != DVec2::ZERO {
+                        blended += 1;
+                        assert!(
+                            within(fp.meridians, i, j),
+                            "{what}: texel ({i}, {j}) blends {v} outside {:?}",
+                            fp.meridians
+                        );
+                    }
+                }
+            }
+            assert!(blended > 20, "{what}: only {blended} texels blend");
             let mut moved = 0;
             for j in 0..n {
                 for i in 0..n {

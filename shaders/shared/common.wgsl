@@ -79,6 +79,9 @@ struct Frame {
     image_y: u32,
     image_pitch: u32,
     pressed_rect: vec4<u32>,
+    // Texels the elastomer's meridians pass runs over: those within the kernels' reach of
+    // pressed_rect (inside texel_rect).
+    meridian_rect: vec4<u32>,
 }
 
 // The sensor's lens model, ray steps, kernel taps and shading exponents (the Sensor

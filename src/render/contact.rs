@@ -139,6 +139,18 @@ pub struct Footprint {
     pub texels: Rect,
     pub pixels: Option<Rect>,
     pub pressed: Rect,
+    /// The texels of `texels` whose blends along the meridian can differ from zero, where
+    /// the elastomer's meridians pass runs: those within the kernels' reach of `pressed`
+    /// (about half of `texels` over the paper's taps, which grows by the reach along the
+    /// meridian and then along the parallel, all the way round near the tip).
+    pub meridians: Rect,
+}
+
+/// Texels the meridians pass's taps can reach from a texel's centre, each way along both
+/// axes: the kernels' reach (the taps lie within it on the disc, where the meridian is
+/// straight), one more for the 2x2 block a bilinear sample reads, and one for rounding.
+pub fn meridian_margin(grid: &HeightfieldGrid, blend_reach_mm: f64) -> u32 {
+    (blend_reach_mm / grid.texel_mm()).ceil() as u32 + 2
 }
 
 /// Bounds of a footprint's samples on the disc and in the image.
@@ -393,10 +405,14 @@ pub fn footprint(
         )
     };
     // Every marked cell was grown into `texels`, so `pressed` lies inside it.
+    let meridians = pressed
+        .grown_within(meridian_margin(grid, blend_reach_mm), texels)
+        .unwrap_or(pressed);
     Some(Footprint {
         texels,
         pixels,
         pressed,
+        meridians,
     })
 }
 

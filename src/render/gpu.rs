@@ -110,6 +110,8 @@ struct Prepared {
     pixel_rect: Option<Rect>,
     /// Where the contact stage traces the object (inside `texel_rect`).
     pressed_rect: Option<Rect>,
+    /// Where the elastomer's meridians pass runs (inside `texel_rect`).
+    meridian_rect: Option<Rect>,
 }
 
 impl Prepared {
@@ -118,6 +120,41 @@ impl Prepared {
     fn field_range(&self, offset: u64, texels: u32) -> Option<(u64, u64)> {
         self.pressed_rect
             .map(|t| (offset, t.h as u64 * texels as u64 * 4))
+    }
+}
+
+/// A contact's texel rects, as the heightfield stages run over them (see `Footprint`).
+#[derive(Debug, Clone, Copy)]
+struct TexelRects {
+    texels: Rect,
+    pressed: Rect,
+    meridians: Rect,
+}
+
+/// Which of a contact's texel rects a blend stage runs over.
+#[derive(Debug, Clone, Copy)]
+enum Over {
+    Meridians,
+    Texels,
+}
+
+impl Over {
+    fn of(self, rects: TexelRects) -> Rect {
+        match self {
+            Over::Meridians => rects.meridians,
+            Over::Texels => rects.texels,
+        }
+    }
+}
+
+impl Prepared {
+    /// Its texel rects, when it touches the heightfield.
+    fn texel_rects(&self) -> Option<TexelRects> {
+        Some(TexelRects {
+            texels: self.texel_rect?,
+            pressed: self.pressed_rect?,
+            meridians: self.meridian_rect?,
+        })
     }
 }
 
@@ -173,6 +210,7 @@ fn prepare_contact(
         texel_rect: footprint.map(|f| f.texels),
         pixel_rect: footprint.and_then(|f| f.pixels),
         pressed_rect: footprint.map(|f| f.pressed),
+        meridian_rect: footprint.map(|f| f.meridians),
     })
 }
 
@@ -1004,24 +1042,32 @@ impl Renderer {
         }
     }
 
-    /// A contact's heightfield stages up to its height map: the penetration over `pressed`,
-    /// then the elastomer's two passes over its texel rect `t`, each followed by the copy of
-    /// what it wrote into its map (the skin's normals follow in
-    /// [`Self::record_after_height`]). `region` covers `t` and whatever the maps still hold
-    /// from the last contact, so the maps are zero outside `t` afterwards.
+    /// A contact's heightfield stages up to its height map: the penetration over its pressed
+    /// rect, then the elastomer's two passes (meridians over its meridian rect, parallels over
+    /// its texel rect `t`), each followed by the copy of what it wrote into its map (the
+    /// skin's normals follow in [`Self::record_after_height`]). `region` covers `t` and
+    /// whatever the maps still hold from the last contact, so the maps are zero outside `t`
+    /// afterwards.
     fn record_heightfield(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (bind, kind): (&wgpu::BindGroup, u32),
-        (t, pressed): (Rect, Rect),
+        rects: TexelRects,
         region: Rect,
         field_offset: u64,
     ) -> Result<()> {
         let contact = self.contact_pipeline(kind)?;
-        self.record_texels(encoder, bind, contact, Map::Penetration, pressed, region);
-        self.copy_field(encoder, pressed, field_offset);
-        for (_, pipeline, map) in self.blend_stages() {
-            self.record_texels(encoder, bind, pipeline, map, t, region);
+        self.record_texels(
+            encoder,
+            bind,
+            contact,
+            Map::Penetration,
+            rects.pressed,
+            region,
+        );
+        self.copy_field(encoder, rects.pressed, field_offset);
+        for (_, pipeline, map, over) in self.blend_stages() {
+            self.record_texels(encoder, bind, pipeline, map, over.of(rects), region);
         }
         Ok(())
     }
@@ -1081,13 +1127,23 @@ impl Renderer {
     }
 
     /// The heightfield stages between the contact stage (whose pipeline is its object's:
-    /// [`Self::contact_pipeline`]) and the skin normals, in order: name, pipeline, and the
-    /// map its output refreshes.
-    fn blend_stages(&self) -> [(&'static str, &wgpu::ComputePipeline, Map); 2] {
+    /// [`Self::contact_pipeline`]) and the skin normals, in order: name, pipeline, the map
+    /// its output refreshes, and the texels it runs over.
+    fn blend_stages(&self) -> [(&'static str, &wgpu::ComputePipeline, Map, Over); 2] {
         let p = &self.pipelines;
         [
-            ("elastomer: meridians", &p.blend_meridian, Map::Elastomer),
-            ("elastomer: parallels", &p.blend_azimuth, Map::Height),
+            (
+                "elastomer: meridians",
+                &p.blend_meridian,
+                Map::Elastomer,
+                Over::Meridians,
+            ),
+            (
+                "elastomer: parallels",
+                &p.blend_azimuth,
+                Map::Height,
+                Over::Texels,
+            ),
         ]
     }
 
@@ -1370,13 +1426,14 @@ impl Renderer {
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
             self.record_frame_start(&mut encoder, slot as u64, p.pixel_rect);
             let mut normals = None;
-            if let (Some(t), Some(pressed)) = (p.texel_rect, p.pressed_rect) {
+            if let Some(rects) = p.texel_rects() {
+                let t = rects.texels;
                 let region = self.dirty.map_or(t, |d| d.union(&t));
                 self.clear_heightfield(&mut encoder, Some(region));
                 self.record_heightfield(
                     &mut encoder,
                     (bind, p.uniform.object_kind),
-                    (t, pressed),
+                    rects,
                     region,
                     field_offsets[slot],
                 )?;
@@ -1669,7 +1726,7 @@ impl Renderer {
         enum Step<'a> {
             Clear,
             Contact(&'a wgpu::ComputePipeline),
-            Texels(&'a wgpu::ComputePipeline, Map),
+            Texels(&'a wgpu::ComputePipeline, Map, Over),
             Normals,
             Select,
             Touched,
@@ -1681,8 +1738,8 @@ impl Renderer {
                 Step::Contact(self.contact_pipeline(p.uniform.object_kind)?),
             ),
         ];
-        for (name, pipeline, map) in self.blend_stages() {
-            stages.push((name, Step::Texels(pipeline, map)));
+        for (name, pipeline, map, over) in self.blend_stages() {
+            stages.push((name, Step::Texels(pipeline, map, over)));
         }
         stages.extend([
             ("elastomer: skin normals", Step::Normals),
@@ -1702,9 +1759,9 @@ impl Renderer {
                     self.copy_field(encoder, pressed, 0);
                 }
             }
-            Step::Texels(pipeline, map) => {
-                if let (Some(t), Some(region)) = (p.texel_rect, region) {
-                    self.record_texels(encoder, &bind, pipeline, map, t, region);
+            Step::Texels(pipeline, map, over) => {
+                if let (Some(rects), Some(region)) = (p.texel_rects(), region) {
+                    self.record_texels(encoder, &bind, pipeline, map, over.of(rects), region);
                 }
             }
             // A frame records the normals and the selection's first step in one pass; here
@@ -1939,6 +1996,7 @@ impl Renderer {
         let (field_offsets, field_bytes) = self.field_offsets(&prepared);
         self.reserve_fields(field_bytes);
         let texel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.texel_rect));
+        let meridian_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.meridian_rect));
         let pixel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.pixel_rect));
         let mut timings = Timings {
             prepare: start.elapsed(),
@@ -1970,6 +2028,18 @@ impl Renderer {
             .map(|&t| self.uniform_buffer(&piece_uniform(Some(t), None)))
             .collect();
         let texel_binds: Vec<wgpu::BindGroup> = texel_uniforms
+            .iter()
+            .map(|u| self.bind_group(u, 0, None))
+            .collect();
+        let meridian_uniforms: Vec<wgpu::Buffer> = meridian_pieces
+            .iter()
+            .map(|m| {
+                let mut u = piece_uniform(None, None);
+                u.meridian_rect = [m.x, m.y, m.w, m.h];
+                self.uniform_buffer(&u)
+            })
+            .collect();
+        let meridian_binds: Vec<wgpu::BindGroup> = meridian_uniforms
             .iter()
             .map(|u| self.bind_group(u, 0, None))
             .collect();
@@ -2005,10 +2075,14 @@ impl Renderer {
                 }
             }
             self.copy_to_map(&mut encoder, Map::Penetration, Some(region));
-            for (_, pipeline, map) in self.blend_stages() {
-                let pieces: Vec<_> = texel_pieces
+            for (_, pipeline, map, over) in self.blend_stages() {
+                let (rects, binds) = match over {
+                    Over::Meridians => (&meridian_pieces, &meridian_binds),
+                    Over::Texels => (&texel_pieces, &texel_binds),
+                };
+                let pieces: Vec<_> = rects
                     .iter()
-                    .zip(&texel_binds)
+                    .zip(binds)
                     .map(|(t, bind)| (pipeline, bind, Groups::over(*t)))
                     .collect();
                 self.record_pass(&mut encoder, &pieces);

@@ -773,6 +773,20 @@ impl Rect {
         }
     }
 
+    /// `self` grown by `cells` each side, clipped to `within`; `None` when they do not meet.
+    pub fn grown_within(&self, cells: u32, within: Rect) -> Option<Rect> {
+        let x0 = self.x.saturating_sub(cells).max(within.x);
+        let y0 = self.y.saturating_sub(cells).max(within.y);
+        let x1 = (self.x + self.w + cells).min(within.x + within.w);
+        let y1 = (self.y + self.h + cells).min(within.y + within.h);
+        (x1 > x0 && y1 > y0).then_some(Rect {
+            x: x0,
+            y: y0,
+            w: x1 - x0,
+            h: y1 - y0,
+        })
+    }
+
     /// The part of `self` outside `other`, as up to four disjoint rectangles.
     pub fn minus(self, other: Rect) -> Vec<Rect> {
         let (ax1, ay1) = (self.x + self.w, self.y + self.h);

@@ -76,9 +76,11 @@ pub struct FrameUniform {
     pub image_pitch: u32,
     /// The texels the contact stage traces: those the object can press.
     pub pressed_rect: [u32; 4],
+    /// The texels the elastomer's meridians pass runs over (`Footprint::meridians`).
+    pub meridian_rect: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 160);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 176);
 
 /// `object_kind` of a loaded mesh's baked SDF grid (WGSL `GRID_OBJECT`).
 pub const GRID_OBJECT: u32 = 100;
@@ -253,6 +255,7 @@ impl FrameUniform {
             image_origin: [0; 2],
             image_pitch: 0,
             pressed_rect: rect4(footprint.map(|f| f.pressed)),
+            meridian_rect: rect4(footprint.map(|f| f.meridians)),
         }
     }
 }
