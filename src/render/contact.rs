@@ -545,6 +545,41 @@ fn nelder_mead(score: impl Fn(DVec2) -> f64, start: (DVec2, f64), size: f64) -> 
     simplex[0]
 }
 
+/// A block of coarse cells or one cell of [`first_touch`]'s search, with its bound on the
+/// offsets there: taken from the queue highest bound first, a block before a cell of the
+/// same bound (the block's cells are then queued), cells of the same bound by row and then
+/// column.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    bound: f64,
+    block: bool,
+    /// (row, column), of blocks or of cells.
+    at: (i64, i64),
+}
+
+impl Ord for Candidate {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.bound
+            .total_cmp(&other.bound)
+            .then(self.block.cmp(&other.block))
+            .then(other.at.cmp(&self.at))
+    }
+}
+
+impl PartialOrd for Candidate {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl PartialEq for Candidate {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other).is_eq()
+    }
+}
+
+impl Eq for Candidate {}
+
 /// First touch of `object` (rotation `world_from_object`, origin `origin` at offset 0),
 /// moved along `-b` (unit `b`: the backing-off direction) towards the undeformed finger,
 /// searched over offsets `t_lo..=t_hi`. Coarse surface samples every
@@ -612,53 +647,88 @@ pub fn first_touch(
     let cells = (n + SUB - 1) / SUB;
     let first = ((half - s_hi - cell_mm) / cell_mm).floor().max(0.0) as i64;
     let last = (cells - first).min(cells);
-    // Rows of cells in parallel, collected in order (so the sort below sees the same list).
-    let row_bounds = |cj: i64| {
-        let mut bounds: Vec<(i64, i64, f64)> = Vec::new();
-        for ci in first..last {
-            let disc = DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm - DVec2::splat(half);
-            let s = disc.length();
-            if s < s_lo - cell_radius || s > s_hi + cell_radius {
-                continue;
+    // The largest offset at which the object comes within `reach` of the surface point at
+    // disc position `disc` (traced downwards from t_hi): a bound on the offsets of every
+    // surface point that close to it on the disc. None when it stays farther all the way
+    // down to t_lo, or the point is out of the swept object's way.
+    let bound_at = |disc: DVec2, reach: f64| -> Option<f64> {
+        let s = disc.length();
+        if s < s_lo - reach || s > s_hi + reach {
+            return None;
+        }
+        let sp = finger.point_at_disc(disc);
+        if !near_path(sp.point, reach) {
+            return None;
+        }
+        let q0 = object_from_world * (sp.point - origin);
+        let mut t = t_hi;
+        for _ in 0..400 {
+            let d = object.sdf(q0 - t * b_obj);
+            if d <= reach {
+                return Some(t);
             }
-            let sp = finger.point_at_disc(disc);
-            if !near_path(sp.point, cell_radius) {
-                continue;
-            }
-            let q0 = object_from_world * (sp.point - origin);
-            let mut t = t_hi;
-            let mut bound = None;
-            for _ in 0..400 {
-                let d = object.sdf(q0 - t * b_obj);
-                if d <= cell_radius {
-                    bound = Some(t);
-                    break;
-                }
-                t -= d - cell_radius + 1e-6;
-                if t < t_lo {
-                    break;
-                }
-            }
-            if t >= t_lo && bound.is_none() {
-                bound = Some(t);
-            }
-            if let Some(u) = bound {
-                bounds.push((ci, cj, u));
+            t -= d - reach + 1e-6;
+            if t < t_lo {
+                return None;
             }
         }
-        bounds
+        Some(t)
     };
-    let mut bounds: Vec<(i64, i64, f64)> = (first..last.max(first))
+    let cell_disc = |ci: i64, cj: i64| {
+        DVec2::new(ci as f64 + 0.5, cj as f64 + 0.5) * cell_mm - DVec2::splat(half)
+    };
+    // The cells in blocks of GROUP x GROUP, each block bounded first with its own radius
+    // (rows of blocks in parallel): a cell's bound is at most its block's (its centre lies
+    // within the block's radius less its own of the block's centre; 1e-5 mm of slack for the
+    // traces' steps), so cells are bounded only in the blocks taken, the most promising
+    // first, and far-off blocks cost one trace instead of sixteen. Cells come out of the
+    // queue in the order of their bounds (ties by row, then column), as a sorted list of
+    // every cell's bound would give them.
+    const GROUP: i64 = 4;
+    let block_radius = cell_mm * GROUP as f64 * std::f64::consts::FRAC_1_SQRT_2 + 1e-9;
+    let span = (last - first).max(0);
+    let blocks = (span + GROUP - 1) / GROUP;
+    let block_cells = |b: i64| first + b * GROUP..(first + (b + 1) * GROUP).min(last);
+    let block_rows = |bj: i64| -> Vec<Candidate> {
+        (0..blocks)
+            .filter_map(|bi| {
+                let centre = DVec2::splat(first as f64 + GROUP as f64 * 0.5) * cell_mm
+                    + DVec2::new(bi as f64, bj as f64) * (GROUP as f64 * cell_mm)
+                    - DVec2::splat(half);
+                bound_at(centre, block_radius).map(|u| Candidate {
+                    bound: u + 1e-5,
+                    block: true,
+                    at: (bj, bi),
+                })
+            })
+            .collect()
+    };
+    let mut queue: std::collections::BinaryHeap<Candidate> = (0..blocks)
         .into_par_iter()
-        .flat_map_iter(row_bounds)
+        .flat_map_iter(block_rows)
         .collect();
-    bounds.sort_by(|x, y| y.2.total_cmp(&x.2));
     let mut floor = t_lo;
     let mut samples: Vec<(SurfaceCoord, f64)> = Vec::new();
-    for (ci, cj, u) in bounds {
-        if u < floor {
+    while let Some(next) = queue.pop() {
+        if next.bound < floor {
             break;
         }
+        if next.block {
+            let (bj, bi) = next.at;
+            for cj in block_cells(bj) {
+                for ci in block_cells(bi) {
+                    if let Some(u) = bound_at(cell_disc(ci, cj), cell_radius) {
+                        queue.push(Candidate {
+                            bound: u,
+                            block: false,
+                            at: (cj, ci),
+                        });
+                    }
+                }
+            }
+            continue;
+        }
+        let (cj, ci) = next.at;
         for j in cj * SUB..(cj * SUB + SUB).min(n) {
             for i in ci * SUB..(ci * SUB + SUB).min(n) {
                 let disc = DVec2::new(i as f64 + 0.5, j as f64 + 0.5) * FIRST_TOUCH_SAMPLE_MM
