@@ -13,7 +13,8 @@
 //! (`render_scene`; two also without the tile list); and the CPU alternative (the CPU mirrors over the same footprint,
 //! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
 //! the machines here are shared and noisy), with the slowest and fastest pass's fps. Then
-//! the stages of a contact frame, the tiles the tile list kept, and what the device charges
+//! the stages of a contact frame, the tiles the tile list kept, the texels the elastomer's
+//! passes run over (texel rects and meridian rects, over the paper's taps), and what the device charges
 //! whatever the work: an empty submission, and a dispatch of one workgroup. The host's speed
 //! (`geltip::gpu::HostSpeed`: a fixed loop's ms on all cores) is timed before every pass,
 //! its value for a row's median pass in the `host ms` column, and printed at the start and
@@ -25,7 +26,7 @@ use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::{Object, Solid};
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
-use geltip::render::{cpu, Contact, Press};
+use geltip::render::{contact, cpu, elastomer, Contact, HeightfieldGrid, Press};
 use geltip::sensor::Sensor;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -409,8 +410,34 @@ fn main() -> anyhow::Result<()> {
         64.0 * per_frame(|t| t.listed_tiles),
         per_frame(|t| t.touched_pixels)
     );
+    texel_rects(&sensor, r.grid(), &contacts(56))?;
     device_overhead(geltip::gpu::GpuContext::shared()?)?;
     println!("{} (at the end)", HostSpeed::measure());
+    Ok(())
+}
+
+/// The texels the elastomer's passes run over a frame, on average over `list`: the texel
+/// rects (the parallels pass and the skin normals) and the meridian rects (the meridians
+/// pass: the pressed rect grown by the kernels' reach).
+fn texel_rects(sensor: &Sensor, grid: &HeightfieldGrid, list: &[Contact]) -> anyhow::Result<()> {
+    let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
+    let (mut texels, mut meridians) = (0, 0);
+    for c in list {
+        let press = Press::from(c);
+        let pose = press.pose(sensor)?;
+        if let Some(f) = contact::footprint(sensor, grid, &pose, &press.object, reach) {
+            texels += f.texels.area();
+            meridians += f.meridians.area();
+        }
+    }
+    let n = list.len().max(1) as f64;
+    println!(
+        "texels a frame over the paper's {} taps: {:.0} in the texel rect (parallels, skin normals), {:.0} in the meridian rect ({:.0}%)",
+        list.len(),
+        texels as f64 / n,
+        meridians as f64 / n,
+        100.0 * meridians as f64 / texels.max(1) as f64
+    );
     Ok(())
 }
 
