@@ -8,6 +8,7 @@
 //! output buffers, and read back together.
 
 use super::camera::{tile_grid, tiles_over};
+use super::contact::Footprint;
 use super::uniforms::{image_pitch, object_kind, FrameUniform, SensorUniform};
 use super::{
     contact, elastomer, Contact, ContactPose, Frame, GroundTruth, HeightfieldGrid, Hold, Press,
@@ -106,32 +107,22 @@ struct Prepared {
     uniform: FrameUniform,
     press: Press,
     pose: ContactPose,
-    texel_rect: Option<Rect>,
+    /// The heightfield texels it moves, presses and blends along meridians (and the pixels,
+    /// as `pixel_rect`); `None` when it touches nothing.
+    footprint: Option<Footprint>,
     pixel_rect: Option<Rect>,
-    /// Where the contact stage traces the object (inside `texel_rect`).
-    pressed_rect: Option<Rect>,
-    /// Where the elastomer's meridians pass runs (inside `texel_rect`).
-    meridian_rect: Option<Rect>,
 }
 
 impl Prepared {
     /// Where this contact's own penetration goes in `penetration_fields` when it starts at
     /// byte `offset`: (offset, bytes) of its pressed rect's rows, or `None` without a rect.
     fn field_range(&self, offset: u64, texels: u32) -> Option<(u64, u64)> {
-        self.pressed_rect
-            .map(|t| (offset, t.h as u64 * texels as u64 * 4))
+        self.footprint
+            .map(|f| (offset, f.pressed.h as u64 * texels as u64 * 4))
     }
 }
 
-/// A contact's texel rects, as the heightfield stages run over them (see `Footprint`).
-#[derive(Debug, Clone, Copy)]
-struct TexelRects {
-    texels: Rect,
-    pressed: Rect,
-    meridians: Rect,
-}
-
-/// Which of a contact's texel rects a blend stage runs over.
+/// Which of a footprint's texel rects a blend stage runs over.
 #[derive(Debug, Clone, Copy)]
 enum Over {
     Meridians,
@@ -139,22 +130,11 @@ enum Over {
 }
 
 impl Over {
-    fn of(self, rects: TexelRects) -> Rect {
+    fn of(self, rects: Footprint) -> Rect {
         match self {
             Over::Meridians => rects.meridians,
             Over::Texels => rects.texels,
         }
-    }
-}
-
-impl Prepared {
-    /// Its texel rects, when it touches the heightfield.
-    fn texel_rects(&self) -> Option<TexelRects> {
-        Some(TexelRects {
-            texels: self.texel_rect?,
-            pressed: self.pressed_rect?,
-            meridians: self.meridian_rect?,
-        })
     }
 }
 
@@ -207,10 +187,8 @@ fn prepare_contact(
         uniform,
         press: press.clone(),
         pose,
-        texel_rect: footprint.map(|f| f.texels),
+        footprint,
         pixel_rect: footprint.and_then(|f| f.pixels),
-        pressed_rect: footprint.map(|f| f.pressed),
-        meridian_rect: footprint.map(|f| f.meridians),
     })
 }
 
@@ -797,6 +775,18 @@ impl Renderer {
             })
     }
 
+    /// A bind group over a uniform buffer of its own for each of `uniforms` (a scene's pieces;
+    /// the bind group keeps its buffer alive).
+    fn bind_uniforms(
+        &self,
+        uniforms: impl IntoIterator<Item = FrameUniform>,
+    ) -> Vec<wgpu::BindGroup> {
+        uniforms
+            .into_iter()
+            .map(|u| self.bind_group(&self.uniform_buffer(&u), 0, None))
+            .collect()
+    }
+
     fn uniform_buffer(&self, u: &FrameUniform) -> wgpu::Buffer {
         self.ctx
             .device
@@ -1052,7 +1042,7 @@ impl Renderer {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (bind, kind): (&wgpu::BindGroup, u32),
-        rects: TexelRects,
+        rects: Footprint,
         region: Rect,
         field_offset: u64,
     ) -> Result<()> {
@@ -1118,7 +1108,7 @@ impl Renderer {
             .into_iter()
             .zip(fields)
             .map(|(p, field)| {
-                let labels = p.pressed_rect.map(|rect| {
+                let labels = p.footprint.map(|f| f.pressed).map(|rect| {
                     contact::indentation_labels(&self.sensor.finger, &self.grid, &field, rect)
                 });
                 ground_truth(&self.sensor, &p.press, &p.pose, labels)
@@ -1426,7 +1416,7 @@ impl Renderer {
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
             self.record_frame_start(&mut encoder, slot as u64, p.pixel_rect);
             let mut normals = None;
-            if let Some(rects) = p.texel_rects() {
+            if let Some(rects) = p.footprint {
                 let t = rects.texels;
                 let region = self.dirty.map_or(t, |d| d.union(&t));
                 self.clear_heightfield(&mut encoder, Some(region));
@@ -1719,7 +1709,7 @@ impl Renderer {
         let p = self.prepare(&Press::from(contact), 0)?;
         let uniform = self.uniform_buffer(&p.uniform.holding(self.changed_rect(p.pixel_rect)));
         let bind = self.bind_group(&uniform, 0, Some(&p.press.object));
-        let region = match (self.dirty, p.texel_rect) {
+        let region = match (self.dirty, p.footprint.map(|f| f.texels)) {
             (Some(d), Some(t)) => Some(d.union(&t)),
             (d, t) => d.or(t),
         };
@@ -1754,20 +1744,20 @@ impl Renderer {
                 }
             }
             Step::Contact(pipeline) => {
-                if let (Some(pressed), Some(region)) = (p.pressed_rect, region) {
+                if let (Some(pressed), Some(region)) = (p.footprint.map(|f| f.pressed), region) {
                     self.record_texels(encoder, &bind, pipeline, Map::Penetration, pressed, region);
                     self.copy_field(encoder, pressed, 0);
                 }
             }
             Step::Texels(pipeline, map, over) => {
-                if let (Some(rects), Some(region)) = (p.texel_rects(), region) {
+                if let (Some(rects), Some(region)) = (p.footprint, region) {
                     self.record_texels(encoder, &bind, pipeline, map, over.of(rects), region);
                 }
             }
             // A frame records the normals and the selection's first step in one pass; here
             // each is timed on its own.
             Step::Normals => {
-                if let (Some(t), Some(region)) = (p.texel_rect, region) {
+                if let (Some(t), Some(region)) = (p.footprint.map(|f| f.texels), region) {
                     self.record_normals_and_select(encoder, 0, Some((&[(t, &bind)], region)), None);
                 }
             }
@@ -1833,11 +1823,12 @@ impl Renderer {
             &[],
         )?;
         out.push(("readback", start.elapsed()));
-        if let (Some(t), Some(r)) = (p.texel_rect, p.pixel_rect) {
+        if let (Some(f), Some(r)) = (p.footprint, p.pixel_rect) {
+            let t = f.texels;
             log::info!("texel rect {}x{}, pixel rect {}x{}", t.w, t.h, r.w, r.h);
         }
-        if p.texel_rect.is_some() {
-            self.dirty = p.texel_rect;
+        if let Some(f) = p.footprint {
+            self.dirty = Some(f.texels);
         }
         Ok(out)
     }
@@ -1995,8 +1986,16 @@ impl Renderer {
         }
         let (field_offsets, field_bytes) = self.field_offsets(&prepared);
         self.reserve_fields(field_bytes);
-        let texel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.texel_rect));
-        let meridian_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.meridian_rect));
+        let texel_pieces = Rect::disjoint(
+            prepared
+                .iter()
+                .filter_map(|p| p.footprint.map(|f| f.texels)),
+        );
+        let meridian_pieces = Rect::disjoint(
+            prepared
+                .iter()
+                .filter_map(|p| p.footprint.map(|f| f.meridians)),
+        );
         let pixel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.pixel_rect));
         let mut timings = Timings {
             prepare: start.elapsed(),
@@ -2023,36 +2022,20 @@ impl Renderer {
             .zip(&contact_uniforms)
             .map(|(p, u)| self.bind_group(u, 0, Some(&p.press.object)))
             .collect();
-        let texel_uniforms: Vec<wgpu::Buffer> = texel_pieces
-            .iter()
-            .map(|&t| self.uniform_buffer(&piece_uniform(Some(t), None)))
-            .collect();
-        let texel_binds: Vec<wgpu::BindGroup> = texel_uniforms
-            .iter()
-            .map(|u| self.bind_group(u, 0, None))
-            .collect();
-        let meridian_uniforms: Vec<wgpu::Buffer> = meridian_pieces
-            .iter()
-            .map(|m| {
-                let mut u = piece_uniform(None, None);
-                u.meridian_rect = [m.x, m.y, m.w, m.h];
-                self.uniform_buffer(&u)
-            })
-            .collect();
-        let meridian_binds: Vec<wgpu::BindGroup> = meridian_uniforms
-            .iter()
-            .map(|u| self.bind_group(u, 0, None))
-            .collect();
+        let texel_binds =
+            self.bind_uniforms(texel_pieces.iter().map(|&t| piece_uniform(Some(t), None)));
+        let meridian_binds = self.bind_uniforms(meridian_pieces.iter().map(|m| {
+            let mut u = piece_uniform(None, None);
+            u.meridian_rect = [m.x, m.y, m.w, m.h];
+            u
+        }));
         // Only the selection without the tile list runs over the pixel pieces one by one.
-        let pixel_uniforms: Vec<wgpu::Buffer> = pixel_pieces
-            .iter()
-            .filter(|_| !self.list_tiles)
-            .map(|&r| self.uniform_buffer(&piece_uniform(None, Some(r))))
-            .collect();
-        let pixel_binds: Vec<wgpu::BindGroup> = pixel_uniforms
-            .iter()
-            .map(|u| self.bind_group(u, 0, None))
-            .collect();
+        let pixel_binds = self.bind_uniforms(
+            pixel_pieces
+                .iter()
+                .filter(|_| !self.list_tiles)
+                .map(|&r| piece_uniform(None, Some(r))),
+        );
         let whole_uniform = self.uniform_buffer(&piece_uniform(None, None));
         let whole_bind = self.bind_group(&whole_uniform, 0, None);
         let span_uniform = self.uniform_buffer(&piece_uniform(texel_span, pixel_span));
@@ -2067,7 +2050,7 @@ impl Renderer {
             self.clear_heightfield(&mut encoder, Some(region));
             // Each object's contact pass over its own pressed rect, with its own pipeline.
             for ((p, bind), &at) in prepared.iter().zip(&contact_binds).zip(&field_offsets) {
-                if let Some(r) = p.pressed_rect {
+                if let Some(r) = p.footprint.map(|f| f.pressed) {
                     let g = (groups(r.w, WORKGROUP), groups(r.h, WORKGROUP));
                     let contact = self.contact_pipeline(p.uniform.object_kind)?;
                     self.dispatch(&mut encoder, contact, bind, g);
