@@ -107,13 +107,17 @@ struct Prepared {
     uniform: FrameUniform,
     press: Press,
     pose: ContactPose,
-    /// The heightfield texels it moves, presses and blends along meridians (and the pixels,
-    /// as `pixel_rect`); `None` when it touches nothing.
+    /// The heightfield texels it moves, presses and blends along meridians, and the pixels
+    /// that can see them move; `None` when it touches nothing.
     footprint: Option<Footprint>,
-    pixel_rect: Option<Rect>,
 }
 
 impl Prepared {
+    /// The pixels it can change; `None` when the lens sees none of its footprint.
+    fn pixel_rect(&self) -> Option<Rect> {
+        self.footprint.and_then(|f| f.pixels)
+    }
+
     /// Where this contact's own penetration goes in `penetration_fields` when it starts at
     /// byte `offset`: (offset, bytes) of its pressed rect's rows, or `None` without a rect.
     fn field_range(&self, offset: u64, texels: u32) -> Option<(u64, u64)> {
@@ -130,10 +134,10 @@ enum Over {
 }
 
 impl Over {
-    fn of(self, rects: Footprint) -> Rect {
+    fn of(self, footprint: Footprint) -> Rect {
         match self {
-            Over::Meridians => rects.meridians,
-            Over::Texels => rects.texels,
+            Over::Meridians => footprint.meridians,
+            Over::Texels => footprint.texels,
         }
     }
 }
@@ -188,7 +192,6 @@ fn prepare_contact(
         press: press.clone(),
         pose,
         footprint,
-        pixel_rect: footprint.and_then(|f| f.pixels),
     })
 }
 
@@ -1042,7 +1045,7 @@ impl Renderer {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (bind, kind): (&wgpu::BindGroup, u32),
-        rects: Footprint,
+        footprint: Footprint,
         region: Rect,
         field_offset: u64,
     ) -> Result<()> {
@@ -1052,12 +1055,12 @@ impl Renderer {
             bind,
             contact,
             Map::Penetration,
-            rects.pressed,
+            footprint.pressed,
             region,
         );
-        self.copy_field(encoder, rects.pressed, field_offset);
+        self.copy_field(encoder, footprint.pressed, field_offset);
         for (_, pipeline, map, over) in self.blend_stages() {
-            self.record_texels(encoder, bind, pipeline, map, over.of(rects), region);
+            self.record_texels(encoder, bind, pipeline, map, over.of(footprint), region);
         }
         Ok(())
     }
@@ -1379,7 +1382,7 @@ impl Renderer {
         let Ran { frames, fields } = self.forget_heightfield_on_error(ran)?;
         let labelled = Instant::now();
         // Only a contact's pixel rect is ever indented: its mask is counted there.
-        let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect).collect();
+        let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect()).collect();
         let truths = self.truths(prepared, fields);
         for (((frame, over_pressed_texels), mut truth), rect) in
             frames.into_iter().zip(truths).zip(pixel_rects)
@@ -1404,7 +1407,7 @@ impl Renderer {
         let (w, h) = (self.sensor.width, self.sensor.height);
         let uniforms: Vec<wgpu::Buffer> = prepared
             .iter()
-            .map(|p| self.uniform_buffer(&p.uniform.holding(self.changed_rect(p.pixel_rect))))
+            .map(|p| self.uniform_buffer(&p.uniform.holding(self.changed_rect(p.pixel_rect()))))
             .collect();
         let binds: Vec<wgpu::BindGroup> = prepared
             .iter()
@@ -1414,23 +1417,23 @@ impl Renderer {
             .collect();
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for (slot, (p, bind)) in prepared.iter().zip(&binds).enumerate() {
-            self.record_frame_start(&mut encoder, slot as u64, p.pixel_rect);
+            self.record_frame_start(&mut encoder, slot as u64, p.pixel_rect());
             let mut normals = None;
-            if let Some(rects) = p.footprint {
-                let t = rects.texels;
+            if let Some(footprint) = p.footprint {
+                let t = footprint.texels;
                 let region = self.dirty.map_or(t, |d| d.union(&t));
                 self.clear_heightfield(&mut encoder, Some(region));
                 self.record_heightfield(
                     &mut encoder,
                     (bind, p.uniform.object_kind),
-                    rects,
+                    footprint,
                     region,
                     field_offsets[slot],
                 )?;
                 self.dirty = Some(t);
                 normals = Some(([(t, bind)], region));
             }
-            let touched = p.pixel_rect.map(|r| Touched {
+            let touched = p.pixel_rect().map(|r| Touched {
                 span: (r, bind),
                 pieces: vec![(r, bind)],
                 camera: bind,
@@ -1448,7 +1451,7 @@ impl Renderer {
         }
         let rects: Vec<Option<Rect>> = prepared
             .iter()
-            .map(|p| self.changed_rect(p.pixel_rect))
+            .map(|p| self.changed_rect(p.pixel_rect()))
             .collect();
         let field_ranges: Vec<Option<(u64, u64)>> = prepared
             .iter()
@@ -1707,7 +1710,7 @@ impl Renderer {
     /// CPU either way.
     pub fn profile_stages(&mut self, contact: &Contact) -> Result<Vec<(&'static str, Duration)>> {
         let p = self.prepare(&Press::from(contact), 0)?;
-        let uniform = self.uniform_buffer(&p.uniform.holding(self.changed_rect(p.pixel_rect)));
+        let uniform = self.uniform_buffer(&p.uniform.holding(self.changed_rect(p.pixel_rect())));
         let bind = self.bind_group(&uniform, 0, Some(&p.press.object));
         let region = match (self.dirty, p.footprint.map(|f| f.texels)) {
             (Some(d), Some(t)) => Some(d.union(&t)),
@@ -1738,7 +1741,7 @@ impl Renderer {
         ]);
         let record = |encoder: &mut wgpu::CommandEncoder, step: &Step| match *step {
             Step::Clear => {
-                self.record_frame_start(encoder, 0, p.pixel_rect);
+                self.record_frame_start(encoder, 0, p.pixel_rect());
                 if let Some(region) = region {
                     self.clear_heightfield(encoder, Some(region));
                 }
@@ -1750,8 +1753,8 @@ impl Renderer {
                 }
             }
             Step::Texels(pipeline, map, over) => {
-                if let (Some(rects), Some(region)) = (p.footprint, region) {
-                    self.record_texels(encoder, &bind, pipeline, map, over.of(rects), region);
+                if let (Some(f), Some(region)) = (p.footprint, region) {
+                    self.record_texels(encoder, &bind, pipeline, map, over.of(f), region);
                 }
             }
             // A frame records the normals and the selection's first step in one pass; here
@@ -1762,7 +1765,7 @@ impl Renderer {
                 }
             }
             Step::Select => {
-                if let Some(r) = p.pixel_rect {
+                if let Some(r) = p.pixel_rect() {
                     let touched = Touched {
                         span: (r, &bind),
                         pieces: vec![(r, &bind)],
@@ -1772,7 +1775,7 @@ impl Renderer {
                 }
             }
             Step::Touched => {
-                if p.pixel_rect.is_some() {
+                if p.pixel_rect().is_some() {
                     self.record_touched_passes(encoder, 0, &bind);
                 }
             }
@@ -1819,11 +1822,11 @@ impl Renderer {
         self.read_frames(
             "profile readback",
             encoder,
-            &[self.changed_rect(p.pixel_rect)],
+            &[self.changed_rect(p.pixel_rect())],
             &[],
         )?;
         out.push(("readback", start.elapsed()));
-        if let (Some(f), Some(r)) = (p.footprint, p.pixel_rect) {
+        if let (Some(f), Some(r)) = (p.footprint, p.pixel_rect()) {
             let t = f.texels;
             log::info!("texel rect {}x{}, pixel rect {}x{}", t.w, t.h, r.w, r.h);
         }
@@ -1996,7 +1999,7 @@ impl Renderer {
                 .iter()
                 .filter_map(|p| p.footprint.map(|f| f.meridians)),
         );
-        let pixel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.pixel_rect));
+        let pixel_pieces = Rect::disjoint(prepared.iter().filter_map(|p| p.pixel_rect()));
         let mut timings = Timings {
             prepare: start.elapsed(),
             ..Timings::default()
@@ -2114,7 +2117,7 @@ impl Renderer {
             indentation: part.indentation,
         };
         let over_pressed = c[OVER_PRESSED] > 0;
-        let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect).collect();
+        let pixel_rects: Vec<Option<Rect>> = prepared.iter().map(|p| p.pixel_rect()).collect();
         let truths = self
             .truths(prepared, fields)
             .into_iter()
