@@ -11,7 +11,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{GeltipError, Result};
 
+mod lock;
 mod png_rows;
+pub use lock::{DirLock, LOCK_FILE};
 pub use png_rows::PngRowCache;
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same directory, flushed and
@@ -175,11 +177,14 @@ pub fn link_or_copy_atomic(src: impl AsRef<Path>, dst: impl AsRef<Path>) -> Resu
 }
 
 /// A text file that grows by whole lines (a manifest): each line goes to the file in one
-/// write, after whatever it describes is complete. A crash can leave at most the last line
-/// torn, which readers must ignore (see the dataset job's resume).
+/// write, after whatever it describes is complete. A failed append (a full disk) is cut back
+/// off the file; a crash can leave at most the last line torn, which readers must ignore
+/// (see the dataset job's resume).
 pub struct LineLog {
     path: PathBuf,
     file: fs::File,
+    /// The file's length after the last whole line.
+    len: u64,
 }
 
 impl LineLog {
@@ -191,17 +196,26 @@ impl LineLog {
             .append(true)
             .open(&path)
             .map_err(|e| GeltipError::io(&path, e))?;
-        Ok(LineLog { path, file })
+        let len = file
+            .metadata()
+            .map_err(|e| GeltipError::io(&path, e))?
+            .len();
+        Ok(LineLog { path, file, len })
     }
 
-    /// Appends `line` (which must not contain a newline) and a newline, in one write.
+    /// Appends `line` (which must not contain a newline) and a newline, in one write. On
+    /// error the file is cut back to its last whole line: a write the disk had room for
+    /// only part of leaves no torn line behind.
     pub fn append(&mut self, line: &str) -> Result<()> {
         let mut buf = Vec::with_capacity(line.len() + 1);
         buf.extend_from_slice(line.as_bytes());
         buf.push(b'\n');
-        self.file
-            .write_all(&buf)
-            .map_err(|e| GeltipError::io(&self.path, e))
+        if let Err(e) = self.file.write_all(&buf) {
+            let _ = self.file.set_len(self.len);
+            return Err(GeltipError::io(&self.path, e));
+        }
+        self.len += buf.len() as u64;
+        Ok(())
     }
 }
 

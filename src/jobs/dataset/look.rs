@@ -1,0 +1,104 @@
+//! The per-sample post-process of an image, on the CPU: the rendered tactile change on a base
+//! image (the rendered empty finger or a real sensor's empty frame), light and paint jitter,
+//! sensor noise, each drawn from `(seed, k)`.
+//!
+//! The renderer renders noise-free: its own noise is drawn from a counter that depends on the
+//! order frames are rendered in, and a per-sample sensor would need a new renderer (1-2 s)
+//! per sample.
+
+use super::sampling::{SampleRng, STREAM_LOOK, STREAM_NOISE};
+use super::spec::Spec;
+use crate::error::{GeltipError, Result};
+use crate::render::Frame;
+use crate::sensor::Sensor;
+use std::fs;
+use std::path::Path;
+
+/// 64-bit FNV-1a of `bytes` (identifies a background image in `dataset.json`).
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// The CPU post-process of a sample's image: the tactile change on a base image, light and
+/// paint jitter, sensor noise. `None` when there is nothing to do.
+pub(super) struct Look {
+    /// The empty finger as rendered (RGB).
+    reference: Vec<u8>,
+    /// What the change is added to: the background, or the reference.
+    base: Vec<u8>,
+    noise: f64,
+    light_jitter: f64,
+    paint_jitter: f64,
+}
+
+impl Look {
+    /// The post-process `spec` asks for, if any, around the rendered empty finger
+    /// `reference` and the loaded `background` (RGB).
+    pub(super) fn new(spec: &Spec, reference: &Frame, background: Option<Vec<u8>>) -> Option<Look> {
+        let needed = background.is_some()
+            || spec.noise > 0.0
+            || spec.light_jitter > 0.0
+            || spec.paint_jitter > 0.0;
+        needed.then(|| {
+            let reference = reference.to_rgb().into_raw();
+            Look {
+                base: background.unwrap_or_else(|| reference.clone()),
+                reference,
+                noise: spec.noise,
+                light_jitter: spec.light_jitter,
+                paint_jitter: spec.paint_jitter,
+            }
+        })
+    }
+
+    /// Sample `k`'s image (RGB) from its rendered frame.
+    pub(super) fn apply(&self, seed: u64, k: u64, frame: &Frame) -> Vec<u8> {
+        let mut rng = SampleRng::new(&[seed, k, STREAM_LOOK]);
+        let gains: [f64; 3] =
+            std::array::from_fn(|_| 1.0 + self.light_jitter * (2.0 * rng.unit() - 1.0));
+        let contrast = 1.0 + self.paint_jitter * (2.0 * rng.unit() - 1.0);
+        let mut noise = SampleRng::new(&[seed, k, STREAM_NOISE]);
+        // Approximately Gaussian: the sum of four 16-bit uniforms, scaled to unit variance.
+        let scale = self.noise * 3.0_f64.sqrt() / 65536.0;
+        let mut out = Vec::with_capacity(self.base.len());
+        for (i, px) in frame.rgba.chunks_exact(4).enumerate() {
+            for c in 0..3 {
+                let j = 3 * i + c;
+                let change = px[c] as f64 - self.reference[j] as f64;
+                let mut v = (self.base[j] as f64 + contrast * change) * gains[c];
+                if self.noise > 0.0 {
+                    let r = noise.next_u64();
+                    let sum =
+                        (r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48);
+                    v += (sum as f64 - 2.0 * 65535.0) * scale;
+                }
+                out.push(v.round().clamp(0.0, 255.0) as u8);
+            }
+        }
+        out
+    }
+}
+
+/// Loads a background image: an RGB frame of the sensor's size.
+pub(super) fn load_background(path: &Path, sensor: &Sensor) -> Result<(Vec<u8>, u64)> {
+    let bytes = fs::read(path).map_err(|e| GeltipError::io(path, e))?;
+    let img = image::load_from_memory(&bytes).map_err(|e| GeltipError::InvalidImage {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    if (img.width(), img.height()) != (sensor.width, sensor.height) {
+        return Err(GeltipError::InvalidImage {
+            path: path.to_path_buf(),
+            reason: format!(
+                "is {}x{}, the sensor's images are {}x{}",
+                img.width(),
+                img.height(),
+                sensor.width,
+                sensor.height
+            ),
+        });
+    }
+    Ok((img.to_rgb8().into_raw(), fnv1a64(&bytes)))
+}

@@ -1,0 +1,137 @@
+//! Rendering a run's samples: a thread draws and prepares the next batches' contacts (CPU
+//! work) while the render streams ([`RenderPool`]) render batches on the GPU, and encoder
+//! threads post-process, encode and write the frames.
+
+use super::encode::{Job, SampleWriter};
+use super::sampling::sample_contact;
+use super::spec::Spec;
+use super::{Progress, Report, Split};
+use crate::error::{GeltipError, Result};
+use crate::object::Object;
+use crate::render::gpu::{PreparedBatch, Renderer, MAX_BATCH};
+use crate::render::pool::RenderPool;
+use crate::render::{Frame, GroundTruth};
+use crate::sensor::Sensor;
+use std::path::Path;
+use std::sync::{mpsc, Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// A batch of samples rendered by one stream.
+struct Rendered<'t> {
+    indices: &'t [u64],
+    frames: Vec<(Frame, GroundTruth)>,
+    /// Drawing and preparing the batch's contacts.
+    prepare: Duration,
+    render: Duration,
+    readback: Duration,
+}
+
+/// Renders the samples `todo` of `spec` into `out` (or encodes and discards them), filling
+/// `report`'s start-up, wall time, split, counts and bytes.
+pub(super) fn render_samples(
+    spec: &Spec,
+    out: Option<&Path>,
+    objects: &[Arc<Object>],
+    background: Option<Vec<u8>>,
+    todo: &[u64],
+    report: &mut Report,
+    progress: &mut impl FnMut(Progress),
+) -> Result<()> {
+    let start = Instant::now();
+    // Noise is added per sample on the CPU; the renderers render without it. Every object's
+    // contact pipeline is built now, at start-up, not in the first batch's frames.
+    let mut config = spec.sensor.config.clone();
+    config.render.noise = 0.0;
+    let render_sensor = Sensor::from_config(spec.sensor.name.clone(), config)?;
+    let mut pool = RenderPool::start(&render_sensor, spec.streams, objects)?;
+    report.startup = start.elapsed();
+    let start = Instant::now();
+    let writer = SampleWriter::new(spec, out, pool.first().reference(), background)?;
+    let total = todo.len() as u64;
+    let mut split = Split::default();
+    let (tx, rx) = mpsc::sync_channel::<Job>(2 * MAX_BATCH);
+    let rx = Mutex::new(rx);
+    let rendered = std::thread::scope(|scope| {
+        for _ in 0..spec.workers.max(1) {
+            scope.spawn(|| writer.serve(&rx));
+        }
+        // Returning drops the sender: the encoder threads stop once the channel is empty.
+        render_batches(
+            &mut pool, spec, objects, todo, &writer, tx, &mut split, progress,
+        )
+    });
+    if let Some(e) = writer.take_error() {
+        return Err(e);
+    }
+    rendered?;
+    writer.add_times_to(&mut split);
+    report.split = split;
+    report.rendered = writer.done();
+    report.bytes = writer.bytes();
+    report.wall = start.elapsed();
+    progress(Progress {
+        done: report.rendered,
+        total,
+    });
+    Ok(())
+}
+
+/// Draws, prepares and renders the samples `todo` in batches on the pool's streams, sending
+/// each frame to the encoder threads through `tx`; adds the preparation and GPU times to
+/// `split`, and reports progress after each batch.
+// Eight arguments: the pipeline's parts, each used once here.
+#[allow(clippy::too_many_arguments)]
+fn render_batches<'t>(
+    pool: &mut RenderPool,
+    spec: &Spec,
+    objects: &[Arc<Object>],
+    todo: &'t [u64],
+    writer: &SampleWriter<'_>,
+    tx: mpsc::SyncSender<Job>,
+    split: &mut Split,
+    progress: &mut impl FnMut(Progress),
+) -> Result<()> {
+    let total = todo.len() as u64;
+    let preparer = pool.first().preparer();
+    // Drawn and prepared on the pool's producer thread, a batch ahead of each stream.
+    let batches = todo.chunks(MAX_BATCH).map(move |indices| {
+        let t = Instant::now();
+        let prepared = indices
+            .iter()
+            .map(|&k| sample_contact(&spec.sensor, objects, spec.depth_range, spec.seed, k))
+            .collect::<Result<Vec<_>>>()
+            .and_then(|contacts| preparer.prepare(&contacts));
+        (indices, prepared, t.elapsed())
+    });
+    let render =
+        |renderer: &mut Renderer,
+         (indices, prepared, prepare): (&'t [u64], Result<PreparedBatch>, Duration)| {
+            let frames = renderer.render_prepared(prepared?)?;
+            let t = renderer.timings();
+            Ok(Rendered {
+                indices,
+                frames,
+                prepare,
+                render: t.render,
+                readback: t.readback,
+            })
+        };
+    // The encoders failed: stop rendering (their error is the run's).
+    let stopped = || GeltipError::input("dataset", "the encoder threads stopped");
+    pool.run(batches, render, |batch| {
+        split.prepare += batch.prepare;
+        split.render += batch.render;
+        split.readback += batch.readback;
+        for (&k, (frame, truth)) in batch.indices.iter().zip(batch.frames) {
+            if writer.failed() {
+                return Err(stopped());
+            }
+            tx.send(Job { k, frame, truth }).map_err(|_| stopped())?;
+        }
+        progress(Progress {
+            done: writer.done(),
+            total,
+        });
+        Ok(())
+    })
+}
