@@ -1,108 +1,14 @@
 //! `geltip dataset` end to end, through the built binary: determinism, shards and merge,
-//! resume after SIGKILL and after a torn manifest line, labels against masks, and the
-//! one-line errors.
+//! resume after SIGKILL and after a torn manifest line, one run at a time in a directory,
+//! labels against masks, and the one-line errors.
 
-use serde_json::Value;
-use std::collections::BTreeMap;
+mod sets;
+
+use sets::{assert_complete, dataset, error_of, files, geltip, labels, run, scratch};
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn geltip() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_geltip"));
-    c.env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    c
-}
-
-/// A fresh empty directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("dataset")
-        .join(name);
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run(args: &[&str]) -> Output {
-    geltip().args(args).output().unwrap()
-}
-
-fn dataset(out: &Path, extra: &[&str]) -> Value {
-    let mut args = vec![
-        "dataset",
-        "--sensor",
-        "paper",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    let o = run(&args);
-    assert!(
-        o.status.success(),
-        "geltip {args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).unwrap()
-}
-
-/// Every file of a set by relative path, with `dataset.json`'s command line (which names the
-/// directory) removed.
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-                continue;
-            }
-            let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
-            let mut bytes = fs::read(&p).unwrap();
-            if rel == "dataset.json" {
-                let mut v: Value = serde_json::from_slice(&bytes).unwrap();
-                v.as_object_mut().unwrap().remove("command");
-                bytes = serde_json::to_vec(&v).unwrap();
-            }
-            out.insert(rel, bytes);
-        }
-    }
-    out
-}
-
-fn labels(dir: &Path) -> Vec<Value> {
-    fs::read_to_string(dir.join("labels.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
-
-/// The set is complete: `n` labels sorted by index, each file present, no temporary file.
-fn assert_complete(dir: &Path, n: u64) {
-    let labels = labels(dir);
-    let indices: Vec<u64> = labels
-        .iter()
-        .map(|l| l["index"].as_u64().unwrap())
-        .collect();
-    assert_eq!(indices, (0..n).collect::<Vec<_>>());
-    for l in &labels {
-        for key in ["image", "depth", "mask"] {
-            if let Some(rel) = l[key].as_str() {
-                assert!(dir.join(rel).is_file(), "{rel} missing");
-            }
-        }
-    }
-    let leftovers: Vec<String> = files(dir)
-        .into_keys()
-        .filter(|p| p.ends_with(".tmp"))
-        .collect();
-    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
-    let images = fs::read_dir(dir.join("images")).unwrap().count() as u64;
-    assert_eq!(images, n);
-}
 
 const OPTS: [&str; 12] = [
     "--count",
@@ -250,6 +156,31 @@ fn shards_merged_equal_the_unsharded_set() {
         !o.status.success() && err.contains("missing shards 1/3"),
         "{err}"
     );
+
+    // A merge into a directory another run is writing is refused, and so is a merge of a
+    // shard another run is writing (this test process holds their locks).
+    let mut args = vec!["dataset", "--merge", merged.to_str().unwrap()];
+    args.extend(shard_dirs.iter().map(|d| d.to_str().unwrap()));
+    let before = files(&merged);
+    let lock = geltip::output::DirLock::acquire(&merged, "test").unwrap();
+    let e = error_of(&args);
+    let holder = format!(
+        "is being written by another run (pid {} on ",
+        std::process::id()
+    );
+    assert!(
+        e.contains(&format!("--merge {}: {holder}", merged.display())),
+        "{e}"
+    );
+    drop(lock);
+    assert!(files(&merged) == before, "a refused merge changed the set");
+    let lock = geltip::output::DirLock::acquire(&shard_dirs[1], "test").unwrap();
+    let e = error_of(&args);
+    assert!(
+        e.contains(&format!("shard {}: {holder}", shard_dirs[1].display())),
+        "{e}"
+    );
+    drop(lock);
 }
 
 #[test]
@@ -286,6 +217,8 @@ fn killed_run_resumes_to_a_complete_set() {
     child.wait().unwrap();
     let before = labels(&out).len();
     assert!(before < n, "the run finished before it was killed");
+    // The killed run's lock file is left behind; its lock went with the process.
+    assert!(out.join(geltip::output::LOCK_FILE).exists());
 
     let report = dataset(&out, &["--seed", "3", "--masks", "--count", &count]);
     assert!(report["kept"].as_u64().unwrap() >= 1);
@@ -301,6 +234,82 @@ fn killed_run_resumes_to_a_complete_set() {
     assert!(
         files(&out) == files(&fresh),
         "the resumed set differs from a fresh one"
+    );
+}
+
+/// Two runs into one directory at once: the second fails at once naming the first (pid,
+/// host, start time) and touches nothing; the first completes as if alone.
+#[test]
+fn a_second_run_into_a_directory_being_written_is_refused() {
+    let root = scratch("two_runs");
+    let out = root.join("set");
+    let opts = [
+        "--seed",
+        "6",
+        "--masks",
+        "--count",
+        "64",
+        "--streams",
+        "1",
+        "--jobs",
+        "1",
+    ];
+    let mut first = geltip()
+        .args(["dataset", "--sensor", "paper"])
+        .args(opts)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !out.join("dataset.json").exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "the first run wrote no manifest"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let mut args = vec![
+        "dataset",
+        "--sensor",
+        "paper",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(opts);
+    let second = run(&args);
+    let first_running = first.try_wait().unwrap().is_none();
+    let err = String::from_utf8_lossy(&second.stderr).trim().to_string();
+    assert!(!second.status.success(), "the second run succeeded: {err}");
+    assert_eq!(err.lines().count(), 1, "not one line: {err}");
+    let host = fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
+    let expected = format!(
+        "--out {}: is being written by another run (pid {} on {}, started ",
+        out.display(),
+        first.id(),
+        host.trim()
+    );
+    assert!(err.contains(&expected), "{err}\nexpected: {expected}");
+    assert!(err.contains(" UTC); "), "{err}");
+    assert!(
+        first_running,
+        "the first run ended before the second was refused: make it longer"
+    );
+
+    let first = first.wait_with_output().unwrap();
+    assert!(
+        first.status.success(),
+        "the first run failed: {}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    assert_complete(&out, 64);
+    let fresh = root.join("fresh");
+    dataset(&fresh, &opts);
+    assert!(
+        files(&out) == files(&fresh),
+        "the first run's set differs from a fresh one"
     );
 }
 
@@ -322,15 +331,6 @@ fn torn_line_and_missing_file_are_redone() {
     assert_eq!(report["rendered"], 1);
     assert_complete(&out, 6);
     assert!(files(&out) == before);
-}
-
-/// Runs geltip expecting failure; returns its one-line error.
-fn error_of(args: &[&str]) -> String {
-    let o = run(args);
-    assert!(!o.status.success(), "geltip {args:?} succeeded");
-    let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
-    assert_eq!(err.lines().count(), 1, "not one line: {err}");
-    err
 }
 
 #[test]
