@@ -17,6 +17,10 @@
 //!
 //! Sensor noise, light and paint jitter are applied on the CPU per sample from a hash of
 //! `(seed, k)`: the renderer draws its own noise from a counter that depends on the batch,
+//! and a per-sample sensor would need a new renderer (1-2 s) per sample.
+//!
+//! One run writes a directory at a time: a run (or merge) locks it, and a second one fails
+//! at once naming the first.
 //!
 //! The parts: [`spec`] (the options), [`sampling`] (a sample's contact from `(seed, k)`),
 //! [`look`] (the per-sample post-process), `pipeline` (preparing, render streams, encoder
