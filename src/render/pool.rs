@@ -21,6 +21,7 @@ use std::any::Any;
 use std::collections::BTreeMap;
 use std::sync::mpsc;
 use std::sync::Arc;
+use std::thread::ScopedJoinHandle;
 
 /// Renderers that render submissions side by side: stream `i` is `streams()[i]`.
 /// Generic over the stream type so the scheduling can be tested without a GPU.
@@ -119,31 +120,15 @@ impl<R: Send> RenderPool<R> {
                 })
                 .collect();
             drop(done_tx);
+            // Owned here, so that a panic in `deliver` drops it too and no stream waits on
+            // it while the scope joins them.
+            let done_rx = done_rx;
             let delivered = deliver_in_order(&done_rx, &mut deliver);
             // Streams blocked on handing over a result see the channel closed and stop.
             drop(done_rx);
-            let mut panicked = None;
-            for (i, stream) in streams.into_iter().enumerate() {
-                if let Err(payload) = stream.join() {
-                    panicked.get_or_insert_with(|| {
-                        GeltipError::Gpu(format!(
-                            "render stream {i} panicked: {}",
-                            panic_message(&*payload)
-                        ))
-                    });
-                }
-            }
-            if let Err(payload) = producer.join() {
-                panicked.get_or_insert_with(|| {
-                    GeltipError::Gpu(format!(
-                        "preparing the render streams' submissions panicked: {}",
-                        panic_message(&*payload)
-                    ))
-                });
-            }
+            let panicked = join_all(streams, producer);
             match (delivered, panicked) {
-                (Err(e), _) => Err(e),
-                (Ok(()), Some(e)) => Err(e),
+                (Err(e), _) | (Ok(()), Some(e)) => Err(e),
                 (Ok(()), None) => Ok(()),
             }
         })
@@ -183,6 +168,33 @@ fn deliver_in_order<T>(
         }
     }
     Ok(())
+}
+
+/// Joins the streams' threads and the producer's: the first panic, as an error.
+fn join_all(
+    streams: Vec<ScopedJoinHandle<'_, ()>>,
+    producer: ScopedJoinHandle<'_, ()>,
+) -> Option<GeltipError> {
+    let mut panicked = None;
+    for (i, stream) in streams.into_iter().enumerate() {
+        if let Err(payload) = stream.join() {
+            panicked.get_or_insert_with(|| {
+                GeltipError::Gpu(format!(
+                    "render stream {i} panicked: {}",
+                    panic_message(&*payload)
+                ))
+            });
+        }
+    }
+    if let Err(payload) = producer.join() {
+        panicked.get_or_insert_with(|| {
+            GeltipError::Gpu(format!(
+                "preparing the render streams' submissions panicked: {}",
+                panic_message(&*payload)
+            ))
+        });
+    }
+    panicked
 }
 
 fn panic_message(payload: &(dyn Any + Send)) -> &str {
@@ -296,6 +308,19 @@ mod tests {
                 .contains("submissions panicked: no submission 4"),
             "{e}"
         );
+        // A panic where the results are handed over is the caller's: it propagates, and
+        // no stream is left waiting.
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            p.run(
+                0..100usize,
+                |_, c| Ok(c),
+                |c| {
+                    assert!(c < 3, "delivery broke at {c}");
+                    Ok(())
+                },
+            )
+        }));
+        assert!(caught.is_err());
         // The pool is usable after a failed run.
         assert_eq!(p.map(0..3usize, |_, c| Ok(c)).unwrap(), vec![0, 1, 2]);
     }
