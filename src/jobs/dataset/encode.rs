@@ -9,6 +9,7 @@ use crate::error::{GeltipError, Result};
 use crate::output::{self, LineLog, PngColor, PngRowCache};
 use crate::render::{self, Frame, GroundTruth};
 use serde_json::{json, Value};
+use std::panic::AssertUnwindSafe;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Mutex};
@@ -92,8 +93,24 @@ impl<'a> SampleWriter<'a> {
             if self.failed() {
                 continue;
             }
-            if let Err(e) = self.process(job) {
-                self.fail(e);
+            let k = job.k;
+            // A panic is this sample's error: a thread that died would leave the renderers
+            // blocked on a full channel once every encoder had.
+            let done = std::panic::catch_unwind(AssertUnwindSafe(|| self.process(job)));
+            match done {
+                Ok(Ok(())) => {}
+                Ok(Err(e)) => self.fail(e),
+                Err(payload) => {
+                    let message = payload
+                        .downcast_ref::<&str>()
+                        .map(|s| s.to_string())
+                        .or_else(|| payload.downcast_ref::<String>().cloned())
+                        .unwrap_or_default();
+                    self.fail(GeltipError::input(
+                        format!("sample {k}"),
+                        format!("encoding panicked: {message}"),
+                    ));
+                }
             }
         }
     }
