@@ -1105,25 +1105,9 @@ impl Simulator {
                     // What `Renderer::render_batch` would refuse (halfway through the
                     // batch, without saying which contact), refused up front with the
                     // library's messages and the contact's index.
-                    let checks = [
-                        ("--azimuth", azimuth_deg),
-                        ("--spin", spin_deg),
-                        ("--depth", depth_mm),
-                    ];
-                    for (flag, v) in checks {
-                        if !v.is_finite() {
-                            return Err(bad(
-                                format!("contacts[{k}]"),
-                                format!("{flag}: must be a finite number, got {v}"),
-                            ));
-                        }
-                    }
-                    if depth_mm < 0.0 {
-                        return Err(bad(
-                            format!("contacts[{k}]"),
-                            format!("--depth: a press depth cannot be negative, got {depth_mm} mm"),
-                        ));
-                    }
+                    p.hold
+                        .check()
+                        .map_err(|e| bad(format!("contacts[{k}]"), e.to_string()))?;
                     list.push(Contact {
                         object: p.object,
                         place,
