@@ -21,4 +21,5 @@ pub mod object;
 pub mod output;
 pub mod plot;
 pub mod render;
+pub mod scene;
 pub mod view;

@@ -192,7 +192,7 @@ fn bad_render_and_localise_input() {
     for (args, needle) in [
         (
             vec!["--object", "sphere", "--at", "rotation=x", "--depth", "1"],
-            "--at",
+            "--at: the value of 'rotation=x' is not a number",
         ),
         (
             vec![
@@ -207,7 +207,28 @@ fn bad_render_and_localise_input() {
         ),
         (
             vec!["--object", "sphere", "--at", "rotation=10", "--depth", "-1"],
-            "--depth",
+            "--depth: a press depth cannot be negative, got -1 mm",
+        ),
+        (
+            vec![
+                "--object",
+                "sphere",
+                "--at",
+                "rotation=10",
+                "--depth",
+                "1",
+                "--tilt-towards",
+                "nan",
+            ],
+            "--tilt-towards: must be a finite number, got NaN",
+        ),
+        (
+            vec!["--object", "sphere", "--pose", "0,0,x,1,0,0,0"],
+            "--pose: 'x' is not a number",
+        ),
+        (
+            vec!["--object", "sphere", "--pose", "0 0 0 2 0 0 0"],
+            "--pose: the quaternion w x y z must have length 1",
         ),
         (
             vec![
@@ -360,7 +381,10 @@ fn render_pose_and_scene() {
     ]);
     assert_ne!(code, 0);
     assert!(
-        error_line(&err).contains("contact 1: needs at and depth"),
+        error_line(&err).contains(&format!(
+            "scene {}: contacts[0].depth: required",
+            scene.display()
+        )),
         "{err}"
     );
     let (code, _, err) = geltip(&[
@@ -376,4 +400,120 @@ fn render_pose_and_scene() {
     ]);
     assert_ne!(code, 0);
     assert!(error_line(&err).contains("short of touching"), "{err}");
+}
+
+/// Scene files take `at` as text or a table and name the file and the contact in errors.
+#[test]
+fn scene_errors_name_the_contact() {
+    let png = temp("scene-errors.png");
+    let render = |scene: &std::path::Path| {
+        geltip(&[
+            "render",
+            "--sensor",
+            "paper",
+            "--scene",
+            scene.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ])
+    };
+    let scene = temp("scene-errors.json");
+    for (contacts, says) in [
+        (
+            r#"[{"object": "sphere", "at": {"rotation": 30}, "depth": 1}, {"object": "cone", "at": "s=4", "depth": -2}]"#,
+            "contacts[1].depth: a press depth cannot be negative, got -2 mm",
+        ),
+        (
+            r#"[{"object": "sphere", "at": {"rotation": 30, "s": 1}, "depth": 1}]"#,
+            "contacts[0].at: expected one key of rotation, translation, s",
+        ),
+        (
+            r#"[{"object": "sphere", "at": "rotation=30", "depth": "deep"}]"#,
+            "contacts[0].depth: invalid type: string",
+        ),
+        (
+            r#"[{"object": "sphere", "at": "rotation=30", "depht": 1}]"#,
+            "contacts[0].depht: unknown field `depht`",
+        ),
+        (
+            r#"[{"object": "sphere", "at": "translation=99", "depth": 1}]"#,
+            "contacts[0].at: translation 99 mm is",
+        ),
+        (
+            r#"[{"object": "pyramid", "at": "rotation=30", "depth": 1}]"#,
+            "contacts[0]: object 'pyramid'",
+        ),
+    ] {
+        std::fs::write(&scene, format!(r#"{{"contacts": {contacts}}}"#)).unwrap();
+        let (code, _, err) = render(&scene);
+        assert_eq!(code, 1, "{contacts}");
+        let line = error_line(&err);
+        let prefix = format!("error: scene {}: ", scene.display());
+        assert!(
+            line.starts_with(&prefix) && line.contains(says),
+            "{contacts}: {line}"
+        );
+        assert!(!png.exists(), "a refused scene left a file");
+    }
+    // The same scene in TOML, with a table for `at`, renders.
+    let toml = temp("scene-table.toml");
+    std::fs::write(
+        &toml,
+        "[[contacts]]\nobject = \"sphere\"\nat = {rotation = 30}\ndepth = 1.0\n",
+    )
+    .unwrap();
+    let (code, out, err) = render(&toml);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(json(&out)["contacts"][0]["place"], "rotation 30 deg");
+}
+
+/// A press the finger and the object cannot make is a one-line error saying how deep it
+/// can go, not an empty frame labelled as if pressed.
+#[test]
+fn a_press_through_the_finger_is_refused() {
+    let png = temp("through.png");
+    let (code, out, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--object",
+        "sphere",
+        "--at",
+        "rotation=0",
+        "--depth",
+        "1e9",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{out}");
+    let line = error_line(&err);
+    assert!(
+        line.starts_with("error: --depth: the sphere pressed 1000000000 mm deep")
+            && line.contains("only up to"),
+        "{line}"
+    );
+    assert!(!png.exists(), "a refused press left a file");
+}
+
+/// A failed write says its cause once.
+#[test]
+fn io_errors_say_their_cause_once() {
+    let file = temp("a-regular-file");
+    std::fs::write(&file, b"").unwrap();
+    let png = file.join("x.png");
+    let (code, _, err) = geltip(&[
+        "render",
+        "--sensor",
+        "paper",
+        "--reference",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1);
+    let line = error_line(&err);
+    assert!(
+        line.starts_with(&format!("error: {}: ", png.display())),
+        "{line}"
+    );
+    assert_eq!(line.matches("(os error").count(), 1, "{line}");
 }

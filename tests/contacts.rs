@@ -1,11 +1,11 @@
-//! Contacts defined by first touch (issue 10): objects whose top is not a single point on the
+//! Contacts defined by first touch: objects whose top is not a single point on the
 //! contact normal (a ring, a flat disc on the cylinder, a tilted cylinder), rigid poses
-//! against --at/--spin/--tilt, several objects in one frame, and contacts that cannot touch
+//! against at/spin/tilt, several objects in one frame, and contacts that cannot touch
 //! or cannot be seen.
 
 use geltip::object::{dims, Object, Solid};
 use geltip::render::gpu::Renderer;
-use geltip::render::{contact, parse_pose, Frame, GroundTruth, Hold, Place, Press};
+use geltip::render::{contact, Frame, GroundTruth, Hold, Place, Press};
 use geltip::sensor::Sensor;
 use glam::DVec3;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -60,7 +60,7 @@ fn rgb_at(frame: &Frame, px: glam::DVec2) -> [u8; 4] {
 }
 
 /// First touch against analytic answers: a top point on the normal touches at offset 0
-/// exactly (so the paper's seven solids are placed as before); the torus at the tip comes
+/// exactly (so the paper's seven solids sit with their tops at the place); the torus at the tip comes
 /// in by exactly its minor radius (its tube's centre circle, radius 4, meets the 7.5 mm
 /// hemisphere grown by 1 mm at sqrt(8.5^2 - 4^2) = 7.5 above the centre); the tube's inner
 /// rim (radius 2) touches sqrt(7.5^2 - 2^2) - 7.5 mm in.
@@ -108,9 +108,10 @@ fn first_touch_offsets_match_the_geometry() {
 }
 
 /// An edge's knife-sharp ridge lying across the finger at a slant: random dataset poses
-/// (seed 2), where the first-touch search used to creep along the ridge and stop short (up
-/// to 0.046 mm, with 84 000 traces for one pose). Placed at its first touch, no point of the
-/// ridge may be inside the finger, and the nearest must touch it.
+/// (seed 2), where a search along the meridian and the parallel alone creeps along the
+/// ridge and stops short (up to 0.046 mm, with 84 000 traces for one pose). Placed at its
+/// first touch, no point of the ridge may be inside the finger, and the nearest must touch
+/// it.
 #[test]
 fn first_touch_follows_a_slanted_ridge_to_its_top() {
     use geltip::jobs::dataset;
@@ -150,7 +151,7 @@ fn first_touch_follows_a_slanted_ridge_to_its_top() {
     }
 }
 
-/// The issue's torus: a ring (4 mm major radius) pressed 0.6 mm at rotation 60 changes the
+/// A torus: a ring (4 mm major radius) pressed 0.6 mm at rotation 60 changes the
 /// image where the ring touches and not in its hole, and its labels report the ring.
 #[test]
 fn torus_marks_its_ring_not_its_hole() {
@@ -362,7 +363,7 @@ fn two_spheres_render_as_two_imprints() {
 }
 
 /// A pose given as a matrix (and as position + quaternion) renders exactly as the same pose
-/// given by --at/--spin/--tilt, and implies the same depth.
+/// given by at/spin/tilt, and implies the same depth.
 #[test]
 fn matrix_pose_equals_at_spin_tilt() {
     let sensor = Sensor::preset("paper").unwrap();
@@ -377,10 +378,9 @@ fn matrix_pose_equals_at_spin_tilt() {
         0.7,
     );
     let (frame, truth) = render_one(&mut r, &p);
-    let text: Vec<String> = truth.pose.iter().map(|v| v.to_string()).collect();
     let posed = Press {
         object: p.object.clone(),
-        hold: parse_pose(&text.join(",")).unwrap(),
+        hold: Hold::from_pose(&truth.pose).unwrap(),
     };
     let pose = posed.pose(&sensor).unwrap();
     let (frame2, truth2) = render_one(&mut r, &posed);
@@ -392,48 +392,47 @@ fn matrix_pose_equals_at_spin_tilt() {
     let q = glam::DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), 2.5);
     let m = glam::DMat3::from_quat(q);
     let c = DVec3::new(1.0, -2.0, 30.0);
-    let text = format!("{} {} {} {} {} {} {}", c.x, c.y, c.z, q.w, q.x, q.y, q.z);
     let Hold::Pose {
         world_from_object,
         origin,
-    } = parse_pose(&text).unwrap()
+    } = Hold::from_pose(&[c.x, c.y, c.z, q.w, q.x, q.y, q.z]).unwrap()
     else {
         panic!("not a pose")
     };
     assert!(world_from_object.abs_diff_eq(m, 1e-12) && origin == c);
     let rows = m.transpose().to_cols_array();
-    let text = format!(
-        "{} {} {} {} {} {} {} {} {} {} {} {} 0 0 0 1",
-        rows[0],
-        rows[1],
-        rows[2],
-        c.x,
-        rows[3],
-        rows[4],
-        rows[5],
-        c.y,
-        rows[6],
-        rows[7],
-        rows[8],
-        c.z
-    );
+    let matrix = [
+        rows[0], rows[1], rows[2], c.x, rows[3], rows[4], rows[5], c.y, rows[6], rows[7], rows[8],
+        c.z, 0.0, 0.0, 0.0, 1.0,
+    ];
     let Hold::Pose {
         world_from_object, ..
-    } = parse_pose(&text).unwrap()
+    } = Hold::from_pose(&matrix).unwrap()
     else {
         panic!("not a pose")
     };
     assert!(world_from_object.abs_diff_eq(m, 1e-12));
-    // Bad poses are one-line errors.
+    // Bad poses are one-line errors naming the field.
+    let diagonal = |d: [f64; 3], last: f64| {
+        [
+            d[0], 0.0, 0.0, 0.0, 0.0, d[1], 0.0, 0.0, 0.0, 0.0, d[2], 0.0, last, 0.0, 0.0, 1.0,
+        ]
+    };
     for (bad, says) in [
-        ("1 2 3", "expected 16 numbers"),
-        ("1,0,0,0, 0,1,0,0, 0,0,2,0, 0,0,0,1", "not a rotation"),
-        ("1,0,0,0, 0,1,0,0, 0,0,1,0, 1,0,0,1", "last row"),
-        ("0 0 0 2 0 0 0", "length 1"),
-        ("0 0 x 1 0 0 0", "not a number"),
+        (vec![1.0, 2.0, 3.0], "expected 16 numbers"),
+        (diagonal([1.0, 1.0, 2.0], 0.0).to_vec(), "not a rotation"),
+        (diagonal([1.0, 1.0, 1.0], 1.0).to_vec(), "last row"),
+        (vec![0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0], "length 1"),
+        (
+            vec![0.0, 0.0, f64::INFINITY, 1.0, 0.0, 0.0, 0.0],
+            "inf is not a finite number",
+        ),
     ] {
-        let e = parse_pose(bad).unwrap_err().to_string();
-        assert!(e.contains(says) && !e.contains('\n'), "{bad}: {e}");
+        let e = Hold::from_pose(&bad).unwrap_err().to_string();
+        assert!(
+            e.starts_with("pose: ") && e.contains(says) && !e.contains('\n'),
+            "{bad:?}: {e}"
+        );
     }
 }
 
@@ -600,4 +599,95 @@ fn may_touch_covers_every_pressed_point_of_its_block() {
         }
     }
     assert!(checked > 200, "only {checked} pressed points");
+}
+
+/// How deep a press can go before the object has gone through the gel: the number the
+/// refusal of a far deeper press says.
+fn deepest(p: &Press, sensor: &Sensor) -> f64 {
+    let mut far = p.clone();
+    let Hold::Surface { depth_mm, .. } = &mut far.hold else {
+        panic!("not a surface hold")
+    };
+    *depth_mm = 1e9;
+    let e = far.pose(sensor).unwrap_err().to_string();
+    assert!(e.starts_with("depth: ") && !e.contains('\n'), "{e}");
+    e.split("only up to ")
+        .nth(1)
+        .and_then(|t| t.split(" mm").next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no limit in: {e}"))
+}
+
+/// A press deeper than the gel is an over-press, rendered and labelled, as long as the
+/// object still reaches the gel; deeper, it has gone through the gel and the shell, and the
+/// press is refused with how deep it can go instead of rendering an empty frame. Rigid
+/// poses that deep are refused too. `over_pressed` says whether the skin is pushed beyond
+/// the gel's thickness: for a top on the normal, untilted, that is every depth beyond it; a
+/// ring or a tilted object pressed a little beyond it pushes the skin less deep along the
+/// skin's own normals.
+#[test]
+fn presses_through_the_gel_are_refused_and_over_presses_labelled() {
+    let sensor = Sensor::preset("paper").unwrap();
+    let t = sensor.finger.shell_thickness;
+    let mut r = paper();
+    for (p, top_on_normal) in [
+        (press(Solid::Sphere, Place::Rotation(0.0), 0.0, 1.0), true),
+        (press(Solid::Cone, Place::Rotation(45.0), 30.0, 1.0), true),
+        (press(Solid::Slab, Place::Translation(5.0), 0.0, 1.0), true),
+        (press(Solid::Disc, Place::Translation(8.0), 90.0, 1.0), true),
+        (press(Solid::Torus, Place::Rotation(60.0), 0.0, 1.0), false),
+        (
+            tilted(
+                Solid::Cylinder,
+                Place::Rotation(40.0),
+                25.0,
+                30.0,
+                15.0,
+                60.0,
+                1.0,
+            ),
+            false,
+        ),
+    ] {
+        let most = deepest(&p, &sensor);
+        assert!(most > t + 0.5, "{}: {most}", p.name());
+        for depth in [t + 0.05, 0.5 * (t + most), most - 1e-3] {
+            let mut q = p.clone();
+            if let Hold::Surface { depth_mm, .. } = &mut q.hold {
+                *depth_mm = depth;
+            }
+            let (_, truth) = render_one(&mut r, &q);
+            let what = format!(
+                "{} at {depth} mm (at most {most}): {} pixels, over-pressed {}, reached {} mm",
+                p.name(),
+                truth.mask_pixels,
+                truth.over_pressed,
+                truth.indentation_reached_mm
+            );
+            assert!(truth.mask_pixels > 0, "{what}");
+            assert_eq!(
+                truth.over_pressed,
+                truth.indentation_reached_mm > t,
+                "{what}"
+            );
+            assert!(truth.over_pressed || !top_on_normal, "{what}");
+            // At the deepest press the object holds the gel's traced depth, past the shell.
+            assert!(truth.over_pressed || depth < 0.5 * (t + most), "{what}");
+        }
+        let mut q = p.clone();
+        if let Hold::Surface { depth_mm, .. } = &mut q.hold {
+            *depth_mm = most + 1e-2;
+        }
+        assert!(q.pose(&sensor).is_err(), "{} past {most}", p.name());
+    }
+    // A sphere posed 20 mm inside the tip, pointing at it.
+    let inside = Press {
+        object: Arc::new(Object::Solid(Solid::Sphere)),
+        hold: Hold::Pose {
+            world_from_object: glam::DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0)),
+            origin: sensor.finger.tip() - DVec3::new(0.0, 0.0, 20.0),
+        },
+    };
+    let e = inside.pose(&sensor).unwrap_err().to_string();
+    assert!(e.starts_with("pose: ") && e.contains("only up to"), "{e}");
 }

@@ -10,7 +10,7 @@ use geltip::gpu::context::MAX_STREAMS;
 use geltip::localise::{Localiser, Method};
 use geltip::object::Object;
 use geltip::render::gpu::{Renderer, MAX_BATCH};
-use geltip::render::{parse_pose, Contact, Frame, GroundTruth, Hold, Place, Press};
+use geltip::render::{Contact, Frame, GroundTruth, Hold, Place, Press};
 use geltip::GeltipError;
 use glam::{DVec2, DVec3};
 use numpy::{
@@ -41,6 +41,7 @@ impl From<GeltipError> for Failure {
             | GeltipError::ConfigParse { .. }
             | GeltipError::UnknownSensor { .. }
             | GeltipError::InvalidInput { .. }
+            | GeltipError::InvalidContact { .. }
             | GeltipError::InvalidMesh { .. }
             | GeltipError::InvalidImage { .. } => "InvalidArgumentError",
             GeltipError::NoAdapter(_) | GeltipError::Gpu(_) | GeltipError::Shader { .. } => {
@@ -679,10 +680,16 @@ impl<'a, 'py> ContactArgs<'a, 'py> {
                     ));
                 }
             }
-            let text = if let Ok(t) = pose.extract::<String>() {
-                t
+            let numbers: Vec<f64> = if let Ok(t) = pose.extract::<String>() {
+                t.split(|c: char| c == ',' || c.is_whitespace())
+                    .filter(|t| !t.is_empty())
+                    .map(|t| {
+                        t.parse::<f64>()
+                            .map_err(|_| bad(f("pose"), format!("'{t}' is not a number")))
+                    })
+                    .collect::<PyResult<_>>()?
             } else {
-                let values: Vec<f64> = pose
+                pose
                     .call_method0("__iter__")
                     .and_then(|_| {
                         let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = pose.extract()?;
@@ -693,14 +700,9 @@ impl<'a, 'py> ContactArgs<'a, 'py> {
                             f("pose"),
                             format!("expected 16 numbers (a 4x4 matrix) or 7 (x y z qw qx qy qz), got {}", repr(pose)),
                         )
-                    })?;
-                values
-                    .iter()
-                    .map(|v| format!("{v:?}"))
-                    .collect::<Vec<_>>()
-                    .join(",")
+                    })?
             };
-            let hold = lib(parse_pose(&text))?;
+            let hold = lib(Hold::from_pose(&numbers))?;
             return Ok(Press { object, hold });
         }
         let place = match given.as_slice() {
@@ -1103,25 +1105,9 @@ impl Simulator {
                     // What `Renderer::render_batch` would refuse (halfway through the
                     // batch, without saying which contact), refused up front with the
                     // library's messages and the contact's index.
-                    let checks = [
-                        ("--azimuth", azimuth_deg),
-                        ("--spin", spin_deg),
-                        ("--depth", depth_mm),
-                    ];
-                    for (flag, v) in checks {
-                        if !v.is_finite() {
-                            return Err(bad(
-                                format!("contacts[{k}]"),
-                                format!("{flag}: must be a finite number, got {v}"),
-                            ));
-                        }
-                    }
-                    if depth_mm < 0.0 {
-                        return Err(bad(
-                            format!("contacts[{k}]"),
-                            format!("--depth: a press depth cannot be negative, got {depth_mm} mm"),
-                        ));
-                    }
+                    p.hold
+                        .check()
+                        .map_err(|e| bad(format!("contacts[{k}]"), e.to_string()))?;
                     list.push(Contact {
                         object: p.object,
                         place,

@@ -20,7 +20,9 @@ pub use solids::{dims, Solid};
 
 use crate::error::{GeltipError, Result};
 use glam::DVec3;
+use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Voxel size (mm) at which [`Object::from_arg`] bakes loaded meshes.
 pub const MESH_VOXEL_MM: f64 = 0.25;
@@ -135,6 +137,26 @@ impl Object {
                 (lo - grid.origin).min(grid.max_corner() - hi).min_element()
             }
         }
+    }
+}
+
+/// Objects by the name they were asked for ([`Object::from_arg`]'s argument): a mesh named
+/// by several contacts is loaded and baked once, and they share it (the renderer keeps one
+/// GPU grid per object).
+#[derive(Debug, Default)]
+pub struct ObjectCache {
+    loaded: HashMap<String, Arc<Object>>,
+}
+
+impl ObjectCache {
+    /// The object `arg` names, loaded on first use.
+    pub fn get(&mut self, arg: &str) -> Result<Arc<Object>> {
+        if let Some(o) = self.loaded.get(arg) {
+            return Ok(o.clone());
+        }
+        let o = Arc::new(Object::from_arg(arg)?);
+        self.loaded.insert(arg.to_string(), o.clone());
+        Ok(o)
     }
 }
 

@@ -1,0 +1,33 @@
+//! `geltip localise`: the contact in a tactile image, on the finger.
+
+use anyhow::Result;
+use clap::Args;
+use geltip::localise::{load_frame, localise as find_contact, Method};
+use geltip::sensor::Sensor;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct LocaliseArgs {
+    #[arg(long)]
+    sensor: String,
+    /// The no-contact image of the same sensor.
+    #[arg(long)]
+    reference: PathBuf,
+    /// paper (the paper's detector) or surface (geltip's: noise-relative threshold,
+    /// averaging on the finger's surface).
+    #[arg(long, default_value = "surface")]
+    method: String,
+    /// The image with the contact.
+    image: PathBuf,
+}
+
+/// Prints the detection, as JSON.
+pub fn localise(args: LocaliseArgs) -> Result<()> {
+    let sensor = Sensor::load(&args.sensor)?;
+    let method = Method::from_name(&args.method)?;
+    let reference = load_frame(&sensor, &args.reference)?;
+    let frame = load_frame(&sensor, &args.image)?;
+    let detection = find_contact(&sensor, &reference, &frame, method)?;
+    println!("{}", detection.to_json());
+    Ok(())
+}

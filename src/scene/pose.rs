@@ -1,0 +1,507 @@
+//! How an object is held against the finger ([`Hold`], [`Press`], the simple [`Contact`])
+//! and where that puts it ([`Press::pose`]): at a place, brought along the normal to its
+//! first touch and pressed on, or as a rigid pose.
+
+use super::first_touch::{first_touch, touching_offset, FirstTouch};
+use super::Place;
+use crate::error::{GeltipError, Result};
+use crate::finger::{Finger, Region, SurfaceCoord, SurfacePoint};
+use crate::object::Object;
+use crate::render::contact::max_trace_depth;
+use crate::render::{heightfield_extent, margin_mm, HeightfieldGrid};
+use crate::sensor::Sensor;
+use glam::{DMat3, DVec3};
+use std::sync::Arc;
+
+/// One object pressed into the finger.
+#[derive(Debug, Clone)]
+pub struct Contact {
+    pub object: Arc<Object>,
+    pub place: Place,
+    /// Azimuth of the contact about the finger's axis, degrees (0 = image +x).
+    pub azimuth_deg: f64,
+    /// The object's own rotation about the contact normal, degrees.
+    pub spin_deg: f64,
+    /// How far the object is pressed in along the normal, mm.
+    pub depth_mm: f64,
+}
+
+/// How an object is held against the finger.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Hold {
+    /// At a place on the surface: the object's axis along the inward normal, spun about it,
+    /// tilted `tilt_deg` away from it towards the tangent direction `tilt_towards_deg`
+    /// (measured from the meridian away from the tip, towards increasing azimuth), then
+    /// brought along the normal until it first touches the undeformed finger and pressed
+    /// `depth_mm` further.
+    Surface {
+        place: Place,
+        azimuth_deg: f64,
+        spin_deg: f64,
+        tilt_deg: f64,
+        tilt_towards_deg: f64,
+        depth_mm: f64,
+    },
+    /// A rigid pose in the camera frame: object-local points p map to
+    /// `world_from_object * p + origin`. The press depth is whatever the pose implies: how far
+    /// the object lies beyond its first touch along its own +z axis.
+    Pose {
+        world_from_object: DMat3,
+        origin: DVec3,
+    },
+}
+
+/// One object held against the finger, in any pose: the general form of [`Contact`]
+/// (which is a `Press` with no tilt).
+#[derive(Debug, Clone)]
+pub struct Press {
+    pub object: Arc<Object>,
+    pub hold: Hold,
+}
+
+impl From<&Contact> for Press {
+    fn from(c: &Contact) -> Press {
+        Press {
+            object: c.object.clone(),
+            hold: Hold::Surface {
+                place: c.place,
+                azimuth_deg: c.azimuth_deg,
+                spin_deg: c.spin_deg,
+                tilt_deg: 0.0,
+                tilt_towards_deg: 0.0,
+                depth_mm: c.depth_mm,
+            },
+        }
+    }
+}
+
+/// Where a contact sits and how its object is oriented, in the camera frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactPose {
+    /// Contact point on the undeformed surface: the place asked for, or for a rigid pose the
+    /// point it touches first.
+    pub point: DVec3,
+    /// Outward surface normal there.
+    pub normal: DVec3,
+    pub coord: SurfaceCoord,
+    pub region: Region,
+    /// Rotation taking object-local vectors to the camera frame. Object-local +z points into
+    /// the finger (along -normal when untilted): objects stand on their base with their top
+    /// at the origin.
+    pub world_from_object: DMat3,
+    /// The object's origin (its top) in the camera frame.
+    pub origin: DVec3,
+    /// How far the object is pressed beyond its first touch (mm): asked for, or implied by a
+    /// rigid pose.
+    pub depth_mm: f64,
+    /// How far from its top's place on the normal the object first touches the undeformed
+    /// finger (mm, outward positive): 0 for a top point on the normal, negative when the
+    /// object had to come closer (a ring's hole).
+    pub first_touch_offset_mm: f64,
+    /// Surface points touched first: the refined point, then the coarse samples within
+    /// [`super::first_touch::FIRST_TOUCH_BAND_MM`] (a ring's circle).
+    pub first_touch: Vec<DVec3>,
+    /// Deepest inward distance the contact stage traces from (mm).
+    pub trace_depth_mm: f64,
+}
+
+impl ContactPose {
+    /// Object-local coordinates of a camera-frame point.
+    pub fn to_object(&self, p: DVec3) -> DVec3 {
+        self.world_from_object.transpose() * (p - self.origin)
+    }
+
+    /// The pose as a 4x4 matrix (row-major: camera-frame point = M (object point, 1)).
+    pub fn matrix_row_major(&self) -> [f64; 16] {
+        let m = glam::DMat4::from_cols(
+            self.world_from_object.x_axis.extend(0.0),
+            self.world_from_object.y_axis.extend(0.0),
+            self.world_from_object.z_axis.extend(0.0),
+            self.origin.extend(1.0),
+        );
+        m.transpose().to_cols_array()
+    }
+}
+
+impl Hold {
+    /// A rigid pose from 16 numbers (a row-major 4x4 matrix whose last row is 0 0 0 1 and
+    /// whose 3x3 part is orthonormal) or 7 (position x y z and unit quaternion w x y z), in
+    /// the camera frame. Errors name the contact field `pose`.
+    pub fn from_pose(v: &[f64]) -> Result<Hold> {
+        let bad = |reason: String| GeltipError::contact("pose", reason);
+        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            return Err(bad(format!("{x} is not a finite number")));
+        }
+        match v.len() {
+            16 => {
+                let r = DMat3::from_cols(
+                    DVec3::new(v[0], v[4], v[8]),
+                    DVec3::new(v[1], v[5], v[9]),
+                    DVec3::new(v[2], v[6], v[10]),
+                );
+                if (v[12], v[13], v[14], v[15]) != (0.0, 0.0, 0.0, 1.0) {
+                    return Err(bad("the matrix's last row must be 0 0 0 1".into()));
+                }
+                let err = (r.transpose() * r - DMat3::IDENTITY)
+                    .to_cols_array()
+                    .iter()
+                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                // Orthonormal of either handedness: the frame `at` places objects in (x along
+                // the meridian, y along the azimuth, z inward) is left-handed, and its labels'
+                // matrices must load back as the same pose.
+                if err > 1e-6 {
+                    return Err(bad(format!(
+                        "the matrix's 3x3 part is not a rotation (orthonormal to {err:.2e}, not 1e-6)"
+                    )));
+                }
+                Ok(Hold::Pose {
+                    world_from_object: r,
+                    origin: DVec3::new(v[3], v[7], v[11]),
+                })
+            }
+            7 => {
+                let q = glam::DQuat::from_xyzw(v[4], v[5], v[6], v[3]);
+                if (q.length() - 1.0).abs() > 1e-6 {
+                    return Err(bad(format!(
+                        "the quaternion w x y z must have length 1, got {:.6}",
+                        q.length()
+                    )));
+                }
+                Ok(Hold::Pose {
+                    world_from_object: DMat3::from_quat(q),
+                    origin: DVec3::new(v[0], v[1], v[2]),
+                })
+            }
+            n => Err(bad(format!(
+                "expected 16 numbers (row-major 4x4 matrix) or 7 (x y z qw qx qy qz), got {n}"
+            ))),
+        }
+    }
+
+    /// Checks the hold's numbers, whatever the sensor: finite, a press depth that is not
+    /// negative, a tilt inside (-90, 90) degrees. Errors name the contact's fields.
+    pub fn check(&self) -> Result<()> {
+        let finite = |field: &str, v: f64| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(GeltipError::contact(
+                    field,
+                    format!("must be a finite number, got {v}"),
+                ))
+            }
+        };
+        match *self {
+            Hold::Surface {
+                place: _,
+                azimuth_deg,
+                spin_deg,
+                tilt_deg,
+                tilt_towards_deg,
+                depth_mm,
+            } => {
+                finite("azimuth", azimuth_deg)?;
+                finite("spin", spin_deg)?;
+                finite("tilt", tilt_deg)?;
+                finite("tilt_towards", tilt_towards_deg)?;
+                finite("depth", depth_mm)?;
+                if depth_mm < 0.0 {
+                    return Err(GeltipError::contact(
+                        "depth",
+                        format!("a press depth cannot be negative, got {depth_mm} mm"),
+                    ));
+                }
+                if !(0.0..90.0).contains(&tilt_deg.abs()) {
+                    return Err(GeltipError::contact(
+                        "tilt",
+                        format!("must lie in (-90, 90) degrees, got {tilt_deg}"),
+                    ));
+                }
+                Ok(())
+            }
+            Hold::Pose {
+                world_from_object,
+                origin,
+            } => {
+                if world_from_object.is_finite() && origin.is_finite() {
+                    Ok(())
+                } else {
+                    Err(GeltipError::contact("pose", "must be finite numbers"))
+                }
+            }
+        }
+    }
+}
+
+impl Contact {
+    /// Checks the contact's numbers and places it on `sensor`'s finger.
+    pub fn pose(&self, sensor: &Sensor) -> Result<ContactPose> {
+        Press::from(self).pose(sensor)
+    }
+}
+
+impl Press {
+    /// The object's name.
+    pub fn name(&self) -> &str {
+        self.object.name()
+    }
+
+    /// Checks the press's numbers and places it on `sensor`'s finger: by first touch and
+    /// depth, or as posed. A press deeper than the gel is thick is an over-press (the
+    /// renderer labels it); one so deep that the object has gone through the gel it is
+    /// traced in is refused.
+    pub fn pose(&self, sensor: &Sensor) -> Result<ContactPose> {
+        self.hold.check()?;
+        match self.hold {
+            Hold::Surface {
+                place,
+                azimuth_deg,
+                spin_deg,
+                tilt_deg,
+                tilt_towards_deg,
+                depth_mm,
+            } => {
+                let f = &sensor.finger;
+                let coord = coord_of(sensor, place, azimuth_deg)?;
+                let sp = f.point_at(coord);
+                let frame = object_frame(f, coord, &sp, spin_deg, tilt_deg, tilt_towards_deg);
+                let touch = self.touch_on_normal(sensor, frame, &sp, place)?;
+                // A top point on the normal touches at offset 0 exactly: the classic bound
+                // on how deep the object reaches holds; otherwise trace the whole shell.
+                let plain = touch.offset_mm == 0.0 && tilt_deg == 0.0;
+                let trace_depth_mm = if plain {
+                    max_trace_depth(f, depth_mm)
+                } else {
+                    max_trace_depth(f, f64::INFINITY)
+                };
+                check_reach(sensor, &self.object, trace_depth_mm)?;
+                let push = depth_mm - touch.offset_mm;
+                let pose = ContactPose {
+                    point: sp.point,
+                    normal: sp.normal,
+                    coord,
+                    region: sp.region,
+                    world_from_object: frame,
+                    origin: sp.point - push * sp.normal,
+                    depth_mm,
+                    first_touch_offset_mm: touch.offset_mm,
+                    first_touch: touch.band.iter().map(|&c| f.point_at(c).point).collect(),
+                    trace_depth_mm,
+                };
+                check_not_through(sensor, &self.object, &pose, -sp.normal).map_err(|most| {
+                    GeltipError::contact(
+                        "depth",
+                        format!(
+                            "the {} pressed {depth_mm} mm deep at {} {most}",
+                            self.name(),
+                            place.label()
+                        ),
+                    )
+                })?;
+                Ok(pose)
+            }
+            Hold::Pose {
+                world_from_object,
+                origin,
+            } => self.rigid_pose(sensor, world_from_object, origin),
+        }
+    }
+
+    /// Where the object, held in `frame` with its top on the normal at `sp`, first touches
+    /// the finger when brought along that normal: offsets searched from where it is clear of
+    /// the (convex) finger down to a finger's radius inside it.
+    fn touch_on_normal(
+        &self,
+        sensor: &Sensor,
+        frame: DMat3,
+        sp: &SurfacePoint,
+        place: Place,
+    ) -> Result<FirstTouch> {
+        let f = &sensor.finger;
+        let object = self.object.as_ref();
+        let search = (-f.radius, object.bounding_radius() + 1e-3);
+        let grid = HeightfieldGrid::for_sensor(sensor);
+        first_touch(f, &grid, object, frame, sp.point, sp.normal, search).ok_or_else(|| {
+            GeltipError::input(
+                format!("object {}", object.name()),
+                format!(
+                    "brought along the normal at {} it never touches the finger (searched {:.1} mm in)",
+                    place.label(),
+                    -search.0
+                ),
+            )
+        })
+    }
+
+    /// The pose of a rigid hold: the depth is how far the object lies beyond its first touch
+    /// along its own +z axis.
+    fn rigid_pose(
+        &self,
+        sensor: &Sensor,
+        world_from_object: DMat3,
+        origin: DVec3,
+    ) -> Result<ContactPose> {
+        let f = &sensor.finger;
+        let grid = HeightfieldGrid::for_sensor(sensor);
+        let object = self.object.as_ref();
+        // Backing off along the object's own -z (its +z points at the finger).
+        let b = -(world_from_object * DVec3::Z).normalize();
+        // Anywhere along its axis: from beyond the finger's far side to its top.
+        let clear = object.bounding_radius() + 1e-3;
+        let span = origin.length() + f.radius + f.cylinder_length + clear;
+        let touch = match first_touch(f, &grid, object, world_from_object, origin, b, (-span, span)) {
+            Some(t) if t.offset_mm >= 0.0 => t,
+            Some(t) => {
+                return Err(GeltipError::contact(
+                    "pose",
+                    format!(
+                        "the object does not touch the finger: it is {:.3} mm short of touching along its +z axis",
+                        -t.offset_mm
+                    ),
+                ))
+            }
+            None => {
+                return Err(GeltipError::contact(
+                    "pose",
+                    "the object does not touch the finger, nor would it moving along its +z axis",
+                ))
+            }
+        };
+        let trace_depth_mm = max_trace_depth(f, f64::INFINITY);
+        check_reach(sensor, object, trace_depth_mm)?;
+        let sp = f.point_at(touch.point);
+        let pose = ContactPose {
+            point: sp.point,
+            normal: sp.normal,
+            coord: touch.point,
+            region: sp.region,
+            world_from_object,
+            origin,
+            depth_mm: touch.offset_mm,
+            first_touch_offset_mm: 0.0,
+            first_touch: touch.band.iter().map(|&c| f.point_at(c).point).collect(),
+            trace_depth_mm,
+        };
+        check_not_through(sensor, object, &pose, -b).map_err(|most| {
+            GeltipError::contact(
+                "pose",
+                format!(
+                    "the {} posed {:.3} mm beyond its first touch {most}",
+                    self.name(),
+                    pose.depth_mm
+                ),
+            )
+        })?;
+        Ok(pose)
+    }
+}
+
+/// The surface coordinate of `place` at `azimuth_deg`: the finger runs from the tip down to
+/// the camera's plane (further where the lens sees behind it). A contact the lens cannot see
+/// renders as the empty finger, and its ground truth says why it has no pixel.
+fn coord_of(sensor: &Sensor, place: Place, azimuth_deg: f64) -> Result<SurfaceCoord> {
+    let f = &sensor.finger;
+    let s = place.arc_length(sensor);
+    let s_max =
+        (heightfield_extent(sensor) - margin_mm(sensor)).max(f.junction_s() + f.cylinder_length);
+    if !(0.0..=s_max).contains(&s) {
+        return Err(GeltipError::contact(
+            "at",
+            format!(
+                "{} is {s:.3} mm from the tip along the surface; the finger runs 0..{s_max:.3} mm",
+                place.label()
+            ),
+        ));
+    }
+    Ok(SurfaceCoord {
+        s,
+        phi: azimuth_deg.to_radians(),
+    })
+}
+
+/// The object's frame at surface point `sp` (at `coord`): x along the meridian (away from
+/// the tip), y along the azimuth, z inward; then the object's spin about its own z; then its
+/// tilt.
+fn object_frame(
+    f: &Finger,
+    coord: SurfaceCoord,
+    sp: &SurfacePoint,
+    spin_deg: f64,
+    tilt_deg: f64,
+    tilt_towards_deg: f64,
+) -> DMat3 {
+    let (e_s, e_phi) = f.tangents_at(coord);
+    let (sin, cos) = spin_deg.to_radians().sin_cos();
+    let x = cos * e_s + sin * e_phi;
+    let y = -sin * e_s + cos * e_phi;
+    let z = -sp.normal;
+    let mut world_from_object = DMat3::from_cols(x, y, z);
+    if tilt_deg != 0.0 {
+        // The object's outward axis (+normal when untilted) leans towards t.
+        let (ts, tc) = tilt_towards_deg.to_radians().sin_cos();
+        let t = tc * e_s + ts * e_phi;
+        let axis = sp.normal.cross(t).normalize();
+        world_from_object = DMat3::from_axis_angle(axis, tilt_deg.to_radians()) * world_from_object;
+    }
+    world_from_object
+}
+
+/// Refuses an object whose baked SDF is not exact as far out as the contact stage traces it.
+fn check_reach(sensor: &Sensor, object: &Object, trace_depth: f64) -> Result<()> {
+    let reach = trace_depth + sensor.config.elastomer.drape_mm;
+    if object.exact_reach_mm() < reach {
+        return Err(GeltipError::input(
+            format!("object {}", object.name()),
+            format!(
+                "its baked SDF is exact only {:.2} mm around it; this sensor's drape and press need {reach:.2} mm",
+                object.exact_reach_mm()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The deepest `pose`'s object can be pressed (mm beyond its first touch, moving along unit
+/// `into`) while it still reaches the gel the contact stage traces: while it holds the
+/// point the trace depth beyond its first-touch point. Deeper, the object has gone through
+/// the gel (and the rigid shell under it), and the frame would show nothing of it.
+fn deepest_press(object: &Object, pose: &ContactPose, into: DVec3) -> f64 {
+    let depth = pose.trace_depth_mm;
+    let Some(&touched) = pose.first_touch.first() else {
+        return depth;
+    };
+    let origin_at_touch = pose.origin - pose.depth_mm * into;
+    let object_from_world = pose.world_from_object.transpose();
+    // The object lies within its bounding radius of its origin.
+    let last = depth + 2.0 * object.bounding_radius() + 1.0;
+    touching_offset(
+        object,
+        object_from_world,
+        touched + depth * into - origin_at_touch,
+        object_from_world * into,
+        last,
+        0.0,
+    )
+    .map_or(depth, |t| t.max(depth))
+}
+
+/// Refuses a press deeper than the gel that has gone through it ([`deepest_press`]); the
+/// error's tail says how deep it can go.
+fn check_not_through(
+    sensor: &Sensor,
+    object: &Object,
+    pose: &ContactPose,
+    into: DVec3,
+) -> std::result::Result<(), String> {
+    let thickness = sensor.finger.shell_thickness;
+    if pose.depth_mm <= thickness {
+        return Ok(());
+    }
+    let most = deepest_press(object, pose, into);
+    if pose.depth_mm <= most {
+        return Ok(());
+    }
+    Err(format!(
+        "has gone through the {thickness} mm gel and the shell under it: it reaches the gel only up to {most:.3} mm deep (beyond {thickness} mm a press is an over-press)"
+    ))
+}
