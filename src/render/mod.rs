@@ -16,6 +16,7 @@ pub mod cpu;
 pub mod elastomer;
 pub mod gpu;
 pub mod leds;
+pub mod touched;
 pub mod uniforms;
 
 use crate::error::{GeltipError, Result};
