@@ -318,10 +318,13 @@ fn layout_mirrors_equal_the_shaders() {
                 "{name}: no stage declares it as an integer constant"
             ));
         }
-        for (stage, wgsl) in found {
-            if wgsl != i64::from(value) {
-                failures.push(format!("{name}: {stage}.wgsl has {wgsl}, Rust {value}"));
-            }
+        let differ: Vec<String> = found
+            .iter()
+            .filter(|&&(_, wgsl)| wgsl != i64::from(value))
+            .map(|(stage, wgsl)| format!("{stage}.wgsl {wgsl}"))
+            .collect();
+        if !differ.is_empty() {
+            failures.push(format!("{name}: Rust {value}, WGSL {}", differ.join(", ")));
         }
     }
     for (stage, module) in &modules {

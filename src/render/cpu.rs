@@ -133,8 +133,8 @@ pub fn render_contact(
         return Ok(frame);
     };
     let w = sensor.width;
-    let touched = touched::select_touched(sensor, grid, &height, pixels);
-    let shaded: Vec<(usize, [u8; 3], f32)> = touched
+    let touched_pixels = touched::select_touched(sensor, grid, &height, pixels);
+    let shaded: Vec<(usize, [u8; 3], f32)> = touched_pixels
         .par_iter()
         .map(|&i| {
             let pixel = DVec2::new((i % w) as f64, (i / w) as f64);

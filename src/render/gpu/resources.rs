@@ -234,6 +234,7 @@ pub(super) fn whole_image(sensor: &Sensor) -> Rect {
 
 impl Resources {
     /// Everything the renderer of `sensor` binds, once [`check_device`] passes.
+    // Over 80 lines: one struct literal, every resource in one place.
     pub fn new(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Result<Resources> {
         check_device(ctx, sensor, grid)?;
         let texels = grid.texels as u64 * grid.texels as u64;
