@@ -16,7 +16,7 @@ use super::stages::ContactPass;
 use super::{Renderer, Timings, MAX_BATCH};
 use crate::error::Result;
 use crate::object::Object;
-use crate::render::uniforms::FrameUniform;
+use crate::render::uniforms::{rect4, FrameUniform};
 use crate::render::{Frame, GroundTruth, Rect};
 use std::time::{Duration, Instant};
 
@@ -59,10 +59,6 @@ pub(super) struct FrameBinds {
 pub(super) struct BindGroups {
     pub groups: Vec<wgpu::BindGroup>,
     uniforms: Vec<(u64, FrameUniform)>,
-}
-
-fn rect4(r: Option<Rect>) -> [u32; 4] {
-    r.map_or([0; 4], |r| [r.x, r.y, r.w, r.h])
 }
 
 /// The smallest rect covering `rects`.

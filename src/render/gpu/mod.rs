@@ -6,13 +6,13 @@
 //! dispatch). The frames of a submission are recorded into one submission, each into its
 //! own slice of the output buffers, and read back together.
 //!
-//! - [`resources`] and [`pipelines`]: everything the renderer binds and runs, made in one
+//! - `resources.rs` and `pipelines.rs`: everything the renderer binds and runs, made in one
 //!   place; [`bindings`]: the one table of bindings; [`layout`]: where the shaders put
 //!   things (held to `shaders/` by `tests/shaders.rs`).
-//! - [`frame`]: the one frame path; [`stages`]: each stage's passes; [`record`]: passes
-//!   and profiling; [`readback`]: frames back to the CPU; [`prepare`]: the CPU's share.
-//! - [`reference`]: the empty finger; [`profile`], [`rays`], [`streams`]: the profile of a
-//!   frame, the lens rays for tests, renderers on devices of their own.
+//! - `frame.rs`: the one frame path; `stages.rs`: each stage's passes; `record.rs`: passes
+//!   and profiling; `readback.rs`: frames back to the CPU; `prepare.rs`: the CPU's share.
+//! - `reference.rs`: the empty finger; `profile.rs`, `rays.rs`, `streams.rs`: the profile
+//!   of a frame, the lens rays for tests, renderers on devices of their own.
 
 pub mod bindings;
 mod frame;
