@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
         return memory_run(&sensor_arg, sensor, n.parse()?);
     }
     let count: u64 = arg("--count").map_or(Ok(256), |c| c.parse())?;
-    let speed = geltip::gpu::HostSpeed::measure();
+    let speed = geltip::host_speed::HostSpeed::measure();
     println!(
         "geltip dataset benchmark on {}: {} samples per row, sensor {sensor_arg} ({}x{}), {} encoder threads and {} render streams by default; {speed}\n",
         geltip::gpu::host_description(&geltip::gpu::GpuContext::shared()?.adapter_info),

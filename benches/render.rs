@@ -4,24 +4,23 @@
 //! submit over N passes, by the host's speed before each).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
-//! sensor), one contact per submission (and the same without the tile list, passes in
-//! turn: `Renderer::set_tile_list`), and batches of contacts per submission; each split
+//! sensor), one contact per submission, and batches of contacts per submission; each split
 //! into CPU preparation, GPU render (submit + wait, the copies for reading back included) and
-//! readback (unpacking the mapped frames), with the
-//! pixels re-rendered per frame; two renderers on devices of their own, one contact per
-//! submit each on its own thread (fps over both); one and two non-overlapping contacts per frame
-//! (`render_scene`; two also without the tile list); and the CPU alternative (the CPU mirrors over the same footprint,
-//! on rayon's threads). Each row is the median of `--repeat N` passes (default 5;
-//! the machines here are shared and noisy), with the slowest and fastest pass's fps. Then
-//! the stages of a contact frame, the tiles the tile list kept, the texels the elastomer's
-//! passes run over (texel rects and meridian rects, over the paper's taps), and what the device charges
-//! whatever the work: an empty submission, and a dispatch of one workgroup. The host's speed
-//! (`geltip::gpu::HostSpeed`: a fixed loop's ms on all cores) is timed before every pass,
-//! its value for a row's median pass in the `host ms` column, and printed at the start and
-//! at the end: shared machines run faster and slower by phases, so a row is only comparable
-//! with another beside the same host speed.
+//! readback (unpacking the mapped frames), with the pixels re-rendered per frame; two
+//! renderers on devices of their own, one contact per submit each on its own thread (fps
+//! over both); one and two non-overlapping contacts per frame (`render_scene`); and the CPU
+//! alternative (the CPU mirrors over the same footprint, on rayon's threads). Each row is the
+//! median of `--repeat N` passes (default 5; the machines here are shared and noisy), with
+//! the slowest and fastest pass's fps. Then the stages of a contact frame, the tiles the tile
+//! list kept, the texels the elastomer's passes run over (texel rects and meridian rects,
+//! over the paper's taps), and what the device charges whatever the work: an empty
+//! submission, and a dispatch of one workgroup. The host's speed
+//! (`geltip::host_speed::HostSpeed`: a fixed loop's ms on all cores) is timed before every
+//! pass, its value for a row's median pass in the `host ms` column, and printed at the start
+//! and at the end: shared machines run faster and slower by phases, so a row is only
+//! comparable with another beside the same host speed.
 
-use geltip::gpu::HostSpeed;
+use geltip::host_speed::HostSpeed;
 use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::{Object, Solid};
@@ -75,27 +74,6 @@ fn row(name: &str, passes: &mut [Pass]) {
         p.t.touched_pixels as f64 / p.frames as f64,
         p.host.all_cores_ms,
     );
-}
-
-/// Passes of `f` with the renderer's tile list on (the default) and off (touched pixels
-/// chosen from every pixel of the pixel rects: `Renderer::set_tile_list`), one of each in
-/// turn, so that both see the host alike.
-fn with_and_without_tile_list(
-    r: &mut Renderer,
-    repeat: usize,
-    frames: usize,
-    mut f: impl FnMut(&mut Renderer) -> anyhow::Result<Timings>,
-) -> anyhow::Result<(Vec<Pass>, Vec<Pass>)> {
-    let (mut on, mut off) = (Vec::new(), Vec::new());
-    for _ in 0..repeat {
-        for (list_tiles, out) in [(true, &mut on), (false, &mut off)] {
-            r.set_tile_list(list_tiles);
-            let result = passes(1, frames, || f(r));
-            r.set_tile_list(true);
-            out.extend(result?);
-        }
-    }
-    Ok((on, off))
 }
 
 /// Runs `f` (which renders `frames` frames and returns the renderer's timings) `repeat`
@@ -251,6 +229,37 @@ fn main() -> anyhow::Result<()> {
         if kept { "kept" } else { "returned to the kernel" }
     );
     println!("{speed_before} (at the start)");
+    print_table_header();
+
+    let n_ref = (frames / 8).max(4);
+    let mut reference = passes(repeat, n_ref, || {
+        each(&mut r, 0..n_ref, |r, _| r.render_reference())
+    })?;
+    row("no contact, full ray cast", &mut reference);
+
+    let list = contacts(frames);
+    if let Some(n) = arg::<usize>(&args, "--host-phases")? {
+        return host_phases(&mut r, &list, n.max(1));
+    }
+    let single = gpu_rows(&mut r, &solids, &list, repeat)?;
+    cpu_row(&r, &list, repeat)?;
+    stage_table(&mut r, &list)?;
+    let per_frame = |f: fn(&Timings) -> u64| {
+        single.iter().map(|p| f(&p.t)).sum::<u64>() as f64 / (repeat * frames) as f64
+    };
+    println!(
+        "tile list, one contact per submit: {:.0} tiles ({:.0} pixels) selected from a frame, {:.0} pixels touched",
+        per_frame(|t| t.listed_tiles),
+        64.0 * per_frame(|t| t.listed_tiles),
+        per_frame(|t| t.touched_pixels)
+    );
+    texel_rects(&sensor, r.grid(), &contacts(56))?;
+    device_overhead(geltip::gpu::GpuContext::shared()?)?;
+    println!("{} (at the end)", HostSpeed::measure());
+    Ok(())
+}
+
+fn print_table_header() {
     println!(
         "| {:<28} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>7} |",
         "what",
@@ -268,33 +277,31 @@ fn main() -> anyhow::Result<()> {
         "|{:-<30}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->9}|",
         "", "", "", "", "", "", "", "", "", ""
     );
+}
 
-    let n_ref = (frames / 8).max(4);
-    let mut reference = passes(repeat, n_ref, || {
-        each(&mut r, 0..n_ref, |r, _| r.render_reference())
-    })?;
-    row("no contact, full ray cast", &mut reference);
-
-    let list = contacts(frames);
-    if let Some(n) = arg::<usize>(&args, "--host-phases")? {
-        return host_phases(&mut r, &list, n.max(1));
-    }
-    let (mut single, mut unlisted) =
-        with_and_without_tile_list(&mut r, repeat, frames, |r| one_per_submit(r, &list))?;
+/// The GPU's rows over `list`: one contact per submit (its passes are returned), on two
+/// streams, in batches, and one and two contacts per scene.
+fn gpu_rows(
+    r: &mut Renderer,
+    solids: &[Arc<Object>],
+    list: &[Contact],
+    repeat: usize,
+) -> anyhow::Result<Vec<Pass>> {
+    let frames = list.len();
+    let mut single = passes(repeat, frames, || one_per_submit(r, list))?;
     row("one contact per submit", &mut single);
-    row("  the same, no tile list", &mut unlisted);
 
     // What a program that renders many contacts can do on the same cores: two renderers on
     // devices of their own (GpuContext::stream, as `geltip dataset --streams` does), each
     // rendering half the contacts one per submit on its own thread; fps over both. Its
     // split is summed over the two.
-    let mut second = Renderer::on(&sensor, geltip::gpu::GpuContext::stream(1)?)?;
-    second.ready_objects(&solids)?;
+    let mut second = Renderer::on(r.sensor(), geltip::gpu::GpuContext::stream(1)?)?;
+    second.ready_objects(solids)?;
     let mut two_streams = passes(repeat, frames, || {
         let (a, b) = list.split_at(list.len() / 2);
         let (ta, tb) = std::thread::scope(|scope| {
             let other = scope.spawn(|| one_per_submit(&mut second, b));
-            let mine = one_per_submit(&mut r, a);
+            let mine = one_per_submit(r, a);
             (mine, other.join())
         });
         let mut t = ta?;
@@ -306,9 +313,7 @@ fn main() -> anyhow::Result<()> {
     // A streaming consumer: each batch's frames are dropped before the next (keeping all of
     // them would time the allocator's fresh pages, not the renderer).
     let mut batched = passes(repeat, frames, || {
-        each(&mut r, list.chunks(MAX_BATCH), |r, batch| {
-            r.render_batch(batch)
-        })
+        each(r, list.chunks(MAX_BATCH), |r, batch| r.render_batch(batch))
     })?;
     row(&format!("batches of {MAX_BATCH} contacts"), &mut batched);
 
@@ -325,22 +330,21 @@ fn main() -> anyhow::Result<()> {
         })
         .collect();
     let mut one_scene = passes(repeat, frames, || {
-        each(&mut r, &ones, |r, p| {
-            r.render_scene(std::slice::from_ref(p))
-        })
+        each(r, &ones, |r, p| r.render_scene(std::slice::from_ref(p)))
     })?;
     row("one contact per scene", &mut one_scene);
-    let (mut two_scene, mut two_unlisted) =
-        with_and_without_tile_list(&mut r, repeat, frames, |r| {
-            each(r, &twins, |r, pair| r.render_scene(pair))
-        })?;
+    let mut two_scene = passes(repeat, frames, || {
+        each(r, &twins, |r, pair| r.render_scene(pair))
+    })?;
     row("two contacts per scene", &mut two_scene);
-    row("  the same, no tile list", &mut two_unlisted);
+    Ok(single)
+}
 
-    // What a user could run instead on the same cores: the CPU mirrors over the same
-    // footprint (the GPU's reference frame as the empty finger), rayon over the touched
-    // pixels. Fewer frames: it is the slow row. Its split is not measured (all "render").
-    let cpu_list = &list[..(frames / 4).max(8).min(list.len())];
+/// What a user could run instead on the same cores: the CPU mirrors over the same
+/// footprint (the GPU's reference frame as the empty finger), rayon over the touched
+/// pixels. Fewer frames: it is the slow row. Its split is not measured (all "render").
+fn cpu_row(r: &Renderer, list: &[Contact], repeat: usize) -> anyhow::Result<()> {
+    let cpu_list = &list[..(list.len() / 4).max(8).min(list.len())];
     let reference_frame = r.reference().clone();
     let (sensor, grid) = (r.sensor().clone(), *r.grid());
     let mut cpu_passes = passes(repeat, cpu_list.len(), || {
@@ -357,11 +361,14 @@ fn main() -> anyhow::Result<()> {
         &format!("CPU mirrors, rayon x{}", rayon::current_num_threads()),
         &mut cpu_passes,
     );
+    Ok(())
+}
 
-    // Where a contact frame's time goes, averaged over eight of the paper's taps and over
-    // random dataset contacts: from timestamps between the stages of one submission where
-    // the device writes them (lavapipe does), else each stage submitted and waited for on
-    // its own (then a stage's time includes a submission and a wait).
+/// Where a contact frame's time goes, averaged over eight of the paper's taps and over
+/// random dataset contacts: from timestamps between the stages of one submission where
+/// the device writes them (lavapipe does), else each stage submitted and waited for on
+/// its own (then a stage's time includes a submission and a wait).
+fn stage_table(r: &mut Renderer, list: &[Contact]) -> anyhow::Result<()> {
     println!();
     let how = if geltip::gpu::GpuContext::shared()?.has_timestamps() {
         "ms, timestamps"
@@ -380,6 +387,7 @@ fn main() -> anyhow::Result<()> {
         .iter()
         .map(|s| Arc::new(Object::Solid(*s)))
         .collect();
+    let sensor = r.sensor().clone();
     let depths = dataset::default_depth_range(sensor.finger.shell_thickness);
     let random = (0..100)
         .map(|k| dataset::sample_contact(&sensor, &objects, depths, 1, k))
@@ -401,18 +409,6 @@ fn main() -> anyhow::Result<()> {
         println!("| {name:<28} | {ms:>14.3} | {random_ms:>22.3} |");
     }
     println!();
-    let per_frame = |f: fn(&Timings) -> u64| {
-        single.iter().map(|p| f(&p.t)).sum::<u64>() as f64 / (repeat * frames) as f64
-    };
-    println!(
-        "tile list, one contact per submit: {:.0} tiles ({:.0} pixels) selected from a frame, {:.0} pixels touched",
-        per_frame(|t| t.listed_tiles),
-        64.0 * per_frame(|t| t.listed_tiles),
-        per_frame(|t| t.touched_pixels)
-    );
-    texel_rects(&sensor, r.grid(), &contacts(56))?;
-    device_overhead(geltip::gpu::GpuContext::shared()?)?;
-    println!("{} (at the end)", HostSpeed::measure());
     Ok(())
 }
 

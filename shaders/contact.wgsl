@@ -36,9 +36,10 @@ fn grid_sdf(p: vec3<f32>) -> f32 {
 }
 
 // The frame's object (FrameUniform object_kind) as a pipeline constant: the renderer builds
-// one contact pipeline per kind it meets (src/render/gpu.rs). Why: llvmpipe runs both sides
-// of every branch, so with the kind read from the uniform every trace step evaluated every
-// solid and the baked grid's eight loads; with a constant the driver folds the rest away.
+// one contact pipeline per kind it meets (src/render/gpu/pipelines.rs). Why: llvmpipe runs
+// both sides of every branch, so with the kind read from the uniform every trace step would
+// evaluate every solid and the baked grid's eight loads; with a constant the driver folds
+// the rest away.
 override OBJECT_KIND: u32 = 0u;
 
 fn object_sdf(p: vec3<f32>) -> f32 {

@@ -3,7 +3,8 @@
 // here the imprint p blends (narrow Gaussian of blend_mm) and the displaced gel bulges
 // around it (the excess of a Gaussian twice as wide), h = max(p, narrow) - bulge *
 // max(wide - narrow, 0), capped to [-T/2, T]. Separable passes along the surface (meridians,
-// then parallels), kernels in surface millimetres. Mirror: src/render/elastomer.rs.
+// then parallels), kernels in surface millimetres; then the normals of the skin they leave.
+// Mirror: src/render/elastomer.rs.
 
 // Each Gaussian samples at its own taps (the wide one's twice as far apart): the narrow
 // blend reads channel x, the wide one channel y. Mirror: src/render/elastomer.rs Kernel.
@@ -108,4 +109,56 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
         h = 0.0;
     }
     height[idx] = h;
+}
+
+// The skin over disc position u moved in by h.
+fn skin_with(u: vec2<f32>, h: f32) -> vec3<f32> {
+    let at = surface_at_disc(u);
+    return at.point - h * at.normal;
+}
+
+// Per texel of the contact's rect: the deformed skin's normal minus the undeformed one, by
+// central differences over one texel on the disc. Written into the elastomer's scratch
+// buffer once the blends are done with it; the camera interpolates it, so shading is smooth
+// across texels. Mirror: src/render/elastomer.rs skin_normals.
+@compute @workgroup_size(8, 8)
+fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
+        return;
+    }
+    let i = frame.texel_rect.x + id.x;
+    let j = frame.texel_rect.y + id.y;
+    let u = texel_centre(i, j);
+    var offset = vec3<f32>(0.0);
+    if length(u) <= sensor.half_size_mm {
+        let n0 = surface_at_disc(u).normal;
+        let ex = vec2<f32>(sensor.texel_mm, 0.0);
+        let ey = vec2<f32>(0.0, sensor.texel_mm);
+        // The four neighbours' heights are texel values (a bilinear sample at a texel's
+        // centre is the texel): two gathers of the 2x2 blocks from (i-1, j) and (i, j-1)
+        // hold them all, in textureGather's order (x, y+1), (x+1, y+1), (x+1, y), (x, y);
+        // zero outside the grid, as a bilinear sample is there.
+        let texels = f32(sensor.texels);
+        let fi = f32(i);
+        let fj = f32(j);
+        let a = textureGather(0, height_map, map_sampler, vec2<f32>(fi, fj + 1.0) / texels);
+        let b = textureGather(0, height_map, map_sampler, vec2<f32>(fi + 1.0, fj) / texels);
+        let h_left = select(0.0, a.w, fi >= 1.0);
+        let h_up = select(0.0, a.y, fj + 1.0 < texels);
+        let h_right = select(0.0, b.y, fi + 1.0 < texels);
+        let h_down = select(0.0, b.w, fj >= 1.0);
+        var n = cross(
+            skin_with(u + ex, h_right) - skin_with(u - ex, h_left),
+            skin_with(u + ey, h_up) - skin_with(u - ey, h_down),
+        );
+        let len = length(n);
+        if len > 0.0 {
+            n = n / len;
+            if dot(n, n0) < 0.0 {
+                n = -n;
+            }
+            offset = n - n0;
+        }
+    }
+    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(offset, 0.0);
 }

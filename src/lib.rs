@@ -14,6 +14,7 @@ pub use finger::{Finger, Region, SurfaceCoord, SurfacePoint};
 pub use lens::{Lens, LensModel};
 pub use sensor::{NotVisible, Sensor, SensorConfig};
 pub mod gpu;
+pub mod host_speed;
 pub mod jobs;
 pub mod localise;
 pub mod memory;

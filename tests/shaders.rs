@@ -270,3 +270,265 @@ fn stages_fit_webgpus_guaranteed_binding_limits() {
         .collect();
     assert!(!over(&extra).is_empty());
 }
+
+/// Each stage composed and parsed (not validated: `all_shaders_compose_and_validate` does).
+fn stage_modules() -> Vec<(&'static str, naga::Module)> {
+    STAGES
+        .iter()
+        .map(|(name, _)| {
+            let source = geltip::gpu::shaders::compose(name).expect("composes");
+            let module = naga::front::wgsl::parse_str(&source).expect("parses");
+            (*name, module)
+        })
+        .collect()
+}
+
+/// The integer a WGSL constant holds, if it holds one.
+fn integer_constant(module: &naga::Module, name: &str) -> Option<i64> {
+    use naga::{Expression as E, Literal as L};
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))?;
+    match module.global_expressions[c.init] {
+        E::Literal(L::U32(v)) => Some(v.into()),
+        E::Literal(L::I32(v)) => Some(v.into()),
+        E::Literal(L::AbstractInt(v)) => Some(v),
+        _ => None,
+    }
+}
+
+/// The renderer's mirrors of where the shaders put things
+/// (`geltip::render::gpu::layout`) hold the shaders' own values: every constant (the
+/// counters' words, the probes' strides, the tile size), and the workgroup size of every
+/// compute entry point of every stage, which the renderer sizes its dispatches by. All
+/// mismatches are reported together.
+#[test]
+fn layout_mirrors_equal_the_shaders() {
+    use geltip::render::gpu::layout::{WGSL_CONSTANTS, WORKGROUP_SIZES};
+    let modules = stage_modules();
+    let mut failures = Vec::new();
+    for &(name, value) in WGSL_CONSTANTS {
+        let found: Vec<(&str, i64)> = modules
+            .iter()
+            .filter_map(|(stage, m)| Some((*stage, integer_constant(m, name)?)))
+            .collect();
+        if found.is_empty() {
+            failures.push(format!(
+                "{name}: no stage declares it as an integer constant"
+            ));
+        }
+        let differ: Vec<String> = found
+            .iter()
+            .filter(|&&(_, wgsl)| wgsl != i64::from(value))
+            .map(|(stage, wgsl)| format!("{stage}.wgsl {wgsl}"))
+            .collect();
+        if !differ.is_empty() {
+            failures.push(format!("{name}: Rust {value}, WGSL {}", differ.join(", ")));
+        }
+    }
+    for (stage, module) in &modules {
+        for ep in &module.entry_points {
+            let size = WORKGROUP_SIZES
+                .iter()
+                .find(|(s, e, _)| s == stage && *e == ep.name)
+                .map(|(_, _, size)| *size);
+            match size {
+                None => failures.push(format!(
+                    "{stage}.wgsl {}: not in layout::WORKGROUP_SIZES",
+                    ep.name
+                )),
+                Some(size) if size != ep.workgroup_size => failures.push(format!(
+                    "{stage}.wgsl {}: @workgroup_size {:?}, Rust {size:?}",
+                    ep.name, ep.workgroup_size
+                )),
+                Some(_) => {}
+            }
+        }
+    }
+    for (stage, entry, _) in WORKGROUP_SIZES {
+        let declared = modules
+            .iter()
+            .any(|(s, m)| s == stage && m.entry_points.iter().any(|ep| ep.name == *entry));
+        if !declared {
+            failures.push(format!("{stage}.wgsl has no entry point {entry}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Every binding any stage declares is the renderer's binding table's
+/// (`geltip::render::gpu::bindings::BINDINGS`, from which its layout and bind groups are
+/// made) at that number: the same name and kind, in group 0; and every binding of the table
+/// is declared.
+#[test]
+fn bindings_table_equals_the_shaders() {
+    use geltip::render::gpu::bindings::{Kind, BINDINGS};
+    use naga::{AddressSpace, StorageAccess, TypeInner};
+    let mut failures = Vec::new();
+    let mut declared = vec![false; BINDINGS.len()];
+    for (stage, module) in stage_modules() {
+        for (_, g) in module.global_variables.iter() {
+            let Some(rb) = &g.binding else { continue };
+            let name = g.name.as_deref().unwrap_or("?");
+            let kind = match (g.space, &module.types[g.ty].inner) {
+                (AddressSpace::Uniform, _) => Some(Kind::Uniform),
+                (AddressSpace::Storage { access }, _) => Some(Kind::Storage {
+                    read_only: !access.contains(StorageAccess::STORE),
+                }),
+                (AddressSpace::Handle, TypeInner::Image { .. }) => Some(Kind::Texture),
+                (AddressSpace::Handle, TypeInner::Sampler { .. }) => Some(Kind::Sampler),
+                _ => None,
+            };
+            let Some(b) = BINDINGS.get(rb.binding as usize).filter(|_| rb.group == 0) else {
+                failures.push(format!(
+                    "{stage}.wgsl {name}: @group({}) @binding({}) is not in the table",
+                    rb.group, rb.binding
+                ));
+                continue;
+            };
+            declared[rb.binding as usize] = true;
+            if b.wgsl_name() != name || Some(b.kind()) != kind {
+                failures.push(format!(
+                    "{stage}.wgsl @binding({}): {name} {kind:?}, the table's {} {:?}",
+                    rb.binding,
+                    b.wgsl_name(),
+                    b.kind()
+                ));
+            }
+        }
+    }
+    for (b, seen) in BINDINGS.iter().zip(declared) {
+        if !seen {
+            failures.push(format!("{b:?}: no stage declares it"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// `(name, offset, size)` of a field of a `#[repr(C)]` struct, or of one element of an
+/// array field, named as its WGSL member.
+macro_rules! member {
+    ($t:ty, $f:ident) => {
+        member!($t, $f as stringify!($f))
+    };
+    ($t:ty, $f:ident as $w:expr) => {{
+        let z: $t = bytemuck::Zeroable::zeroed();
+        (
+            $w.to_string(),
+            std::mem::offset_of!($t, $f),
+            std::mem::size_of_val(&z.$f),
+        )
+    }};
+    ($t:ty, $f:ident [$i:literal] as $w:expr) => {{
+        let z: $t = bytemuck::Zeroable::zeroed();
+        let one = std::mem::size_of_val(&z.$f[0]);
+        ($w.to_string(), std::mem::offset_of!($t, $f) + $i * one, one)
+    }};
+}
+
+/// The members of WGSL struct `name` in `module`: `(name, offset, size)`, and its size.
+fn wgsl_struct(module: &naga::Module, name: &str) -> (Vec<(String, usize, usize)>, usize) {
+    let ty = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name}"))
+        .1;
+    let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        panic!("{name} is not a struct");
+    };
+    let members = members
+        .iter()
+        .map(|m| {
+            let size = module.types[m.ty].inner.size(module.to_ctx());
+            (
+                m.name.clone().unwrap_or_default(),
+                m.offset as usize,
+                size as usize,
+            )
+        })
+        .collect();
+    (members, *span as usize)
+}
+
+/// The uniforms' Rust structs (`geltip::render::uniforms`) lay out their fields where the
+/// WGSL structs `Sensor` and `Frame` read them: every member's offset and size, and the
+/// structs' sizes.
+#[test]
+fn uniform_structs_equal_the_shaders() {
+    use geltip::render::uniforms::{FrameUniform as F, SensorUniform as S};
+    let sensor = vec![
+        member!(S, radius),
+        member!(S, cylinder_length),
+        member!(S, shell_thickness),
+        member!(S, junction_s),
+        member!(S, lens_model),
+        member!(S, focal_px),
+        member!(S, max_theta),
+        member!(S, max_rho),
+        member!(S, k),
+        member!(S, principal),
+        member!(S, image_size),
+        member!(S, texels),
+        member!(S, ray_steps),
+        member!(S, half_size_mm),
+        member!(S, texel_mm),
+        member!(S, blend_mm),
+        member!(S, bulge),
+        member!(S, ambient),
+        member!(S, intensity),
+        member!(S, falloff_mm),
+        member!(S, diffuse),
+        member!(S, specular),
+        member!(S, shininess),
+        member!(S, noise),
+        member!(S, spread),
+        member!(S, drape_mm),
+        member!(S, narrow_step_mm),
+        member!(S, wide_step_mm),
+        member!(S, narrow_taps),
+        member!(S, wide_taps),
+        member!(S, _pad as "_pad0"),
+        member!(S, led_position),
+        member!(S, led_colour),
+        member!(S, blend_weights),
+    ];
+    let frame = vec![
+        member!(F, texel_rect),
+        member!(F, pixel_rect),
+        member!(F, object_x),
+        member!(F, object_y),
+        member!(F, object_z),
+        member!(F, origin),
+        member!(F, object_kind),
+        member!(F, grid_dims[0] as "grid_dims_x"),
+        member!(F, grid_dims[1] as "grid_dims_y"),
+        member!(F, grid_dims[2] as "grid_dims_z"),
+        member!(F, grid_origin),
+        member!(F, noise_seed),
+        member!(F, image_origin[0] as "image_x"),
+        member!(F, image_origin[1] as "image_y"),
+        member!(F, image_pitch),
+        member!(F, pressed_rect),
+        member!(F, meridian_rect),
+    ];
+    let source = geltip::gpu::shaders::compose("contact").unwrap();
+    let module = naga::front::wgsl::parse_str(&source).unwrap();
+    let mut failures = Vec::new();
+    for (name, rust, size) in [
+        ("Sensor", sensor, std::mem::size_of::<S>()),
+        ("Frame", frame, std::mem::size_of::<F>()),
+    ] {
+        let (wgsl, span) = wgsl_struct(&module, name);
+        if span != size {
+            failures.push(format!("{name}: WGSL {span} bytes, Rust {size}"));
+        }
+        if wgsl != rust {
+            failures.push(format!(
+                "{name}: WGSL members (name, offset, size)\n  {wgsl:?}\nRust\n  {rust:?}"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -1310,12 +1310,12 @@ fn keep_freed_memory() -> bool {
     geltip::memory::keep_freed_memory()
 }
 
-/// How fast the host's cores run now (`geltip::gpu::HostSpeed`): a fixed scalar loop's
+/// How fast the host's cores run now (`geltip::host_speed::HostSpeed`): a fixed scalar loop's
 /// milliseconds on one core and on all cores at once, the best of three tries (some 35 ms).
 /// Shared machines run faster and slower by phases; time it beside a speed figure.
 #[pyfunction]
 fn host_speed(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-    let speed = py.detach(geltip::gpu::HostSpeed::measure);
+    let speed = py.detach(geltip::host_speed::HostSpeed::measure);
     let d = PyDict::new(py);
     d.set_item("one_core_ms", speed.one_core_ms)?;
     d.set_item("all_cores_ms", speed.all_cores_ms)?;

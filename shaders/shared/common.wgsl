@@ -1,7 +1,9 @@
 // Shared by every stage of the renderer: the sensor and frame uniforms, the bindings (one
 // layout for the whole pipeline, so binding numbers live in this one place), the lens model,
 // the finger's geometry and the unrolled-disc heightfield. Mirrors: src/render/uniforms.rs
-// (structs), src/lens.rs, src/finger.rs, src/render/mod.rs (HeightfieldGrid).
+// (structs), src/lens.rs, src/finger.rs, src/render/mod.rs (HeightfieldGrid); the bindings,
+// the buffers' layout constants and the workgroup sizes the renderer dispatches by are
+// mirrored in src/render/gpu/{bindings,layout}.rs, and tests/shaders.rs holds them equal.
 
 const PI: f32 = 3.14159265358979;
 const HALF_PI: f32 = 1.57079632679490;
@@ -116,15 +118,14 @@ const REFERENCE_FRAME: u32 = 101u;
 // Stage 2 output: the skin's inward displacement, per texel.
 @group(0) @binding(4) var<storage, read_write> height: array<f32>;
 // Written once by the reference frame, PROBES_STRIDE vec4 per pixel: the disc positions of
-// the three probes of the pixel's ray (a.xy, b.xy), (c.xy, 1, 0); the second vec4's z marks
-// the pixels the lens sees (0 beyond it). After the pixels' (at probe_tiles_at()),
+// the three probes of the pixel's ray and where it enters and leaves the gel, (a.xy, b.xy),
+// (c.xy, t_in, t_out), t_in 0 where the lens sees nothing (shared/probes.wgsl). After the pixels' (at probe_tiles_at()),
 // PROBE_TILE_STRIDE vec4 per tile of PIXEL_TILE x PIXEL_TILE pixels (on the image's grid,
 // row by row): for each of its rays' probes a, b and c, the range of texels (x0, y0, x1, y1,
 // i32 bits) their bilinear samples read over the tile's seen pixels (x0 > x1 when the lens
-// sees none of them); camera.wgsl select_tiles reads them. (In this buffer rather than one
+// sees none of them); touched.wgsl select_tiles reads them. (In this buffer rather than one
 // of their own: WebGPU guarantees eight storage buffers a stage, and these are the eight.)
 @group(0) @binding(5) var<storage, read_write> probes: array<vec4<f32>>;
-// Mirror: src/render/gpu.rs PROBES_BYTES_PER_PIXEL.
 const PROBES_STRIDE: u32 = 2u;
 // The image: packed RGBA8 per pixel.
 @group(0) @binding(6) var<storage, read_write> image: array<u32>;
@@ -132,11 +133,12 @@ const PROBES_STRIDE: u32 = 2u;
 @group(0) @binding(7) var<storage, read_write> indentation: array<f32>;
 // A loaded mesh's SDF: x fastest, then y, then z.
 @group(0) @binding(8) var<storage, read> sdf_grid: array<f32>;
-// The frame's counters and its touched-pixel list: words below (mirror: src/render/gpu.rs).
+// The frame's counters and its touched-pixel list: words below, the list's places in
+// shared/touched_list.wgsl.
 @group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
 // What the heightfield's samplers read (taps along the surface, steps along a ray): copies of
 // the three buffers above as textures, refreshed after each stage that writes them
-// (src/render/gpu.rs). Why: llvmpipe (Mesa 22) loads a storage buffer at an index that
+// (src/render/gpu/stages.rs). Why: llvmpipe (Mesa 22) loads a storage buffer at an index that
 // differs between invocations one invocation at a time, with two branches each, while it
 // fetches texels for all eight lanes at once.
 @group(0) @binding(10) var penetration_map: texture_2d<f32>;
@@ -152,7 +154,7 @@ const PIXEL_TILE: u32 = 8u;
 
 // Texels pressed beyond the shell.
 const OVER_PRESSED: u32 = 0u;
-// Touched pixels (camera.wgsl select_touched) by what their rays' probes see: skin moved less
+// Touched pixels (touched.wgsl list_if_touched) by what their rays' probes see: skin moved less
 // than SHALLOW_MM (listed from the list's front), or more (from its back).
 const SHALLOW_COUNT: u32 = 1u;
 const DEEP_COUNT: u32 = 2u;
@@ -160,7 +162,7 @@ const DEEP_COUNT: u32 = 2u;
 // the deep pixels, as indirect dispatches.
 const SHALLOW_DISPATCH: u32 = 4u;
 const DEEP_DISPATCH: u32 = 8u;
-// Tiles on the tile list (camera.wgsl select_tiles), and the indirect dispatch of
+// Tiles on the tile list (touched.wgsl select_tiles), and the indirect dispatch of
 // select_listed over them (three words).
 const TILE_COUNT: u32 = 3u;
 const SELECT_DISPATCH: u32 = 12u;
@@ -172,11 +174,6 @@ const TOUCHED_WORKGROUP: u32 = 64u;
 // Most workgroups those passes dispatch along x (WebGPU's least limit per dimension); a
 // longer list goes on in further rows of workgroups (y).
 const TOUCHED_MAX_GROUPS: u32 = 65535u;
-
-// Index on the touched list of invocation `id` of a pass over it.
-fn touched_index(id: vec3<u32>) -> u32 {
-    return id.y * TOUCHED_MAX_GROUPS * TOUCHED_WORKGROUP + id.x;
-}
 
 // ---- Lens (src/lens.rs) ----
 

@@ -23,6 +23,21 @@ pub fn padded_bytes_per_row(width: u32, bytes_per_pixel: u32) -> u32 {
     (width * bytes_per_pixel).div_ceil(align) * align
 }
 
+/// The rows of a copy whose rows lie `pitch` bytes apart (padded, e.g. to
+/// [`wgpu::COPY_BYTES_PER_ROW_ALIGNMENT`]), each without its padding: its first
+/// `row_bytes`. The one place padding is stripped from what is read back.
+///
+/// ```
+/// let padded = [1u8, 2, 0, 0, 3, 4, 0, 0];
+/// let rows: Vec<&[u8]> = geltip::gpu::readback::unpadded_rows(&padded, 2, 4).collect();
+/// assert_eq!(rows, [&[1u8, 2][..], &[3, 4][..]]);
+/// ```
+pub fn unpadded_rows(padded: &[u8], row_bytes: usize, pitch: usize) -> impl Iterator<Item = &[u8]> {
+    padded
+        .chunks_exact(pitch.max(1))
+        .map(move |row| &row[..row_bytes.min(row.len())])
+}
+
 /// Bytes per texel of `format` for copies, or an error for formats a plain copy cannot read
 /// (block-compressed, combined depth-stencil, multi-planar).
 pub fn bytes_per_pixel(format: wgpu::TextureFormat) -> Result<u32> {
@@ -502,9 +517,8 @@ fn map_and_unpack(
         .map(|view| {
             out.clear();
             out.reserve(layout.packed_len());
-            let row = layout.row_bytes();
-            for chunk in view.chunks_exact(layout.padded_row as usize) {
-                out.extend_from_slice(&chunk[..row]);
+            for row in unpadded_rows(&view, layout.row_bytes(), layout.padded_row as usize) {
+                out.extend_from_slice(row);
             }
         })
         .map_err(|e| GeltipError::Gpu(format!("{what}: {}", one_line(&e.to_string()))));

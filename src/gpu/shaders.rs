@@ -30,8 +30,11 @@ use crate::error::{GeltipError, Result};
 pub const STAGES: &[(&str, &str)] = &[
     ("contact", include_str!("../../shaders/contact.wgsl")),
     ("elastomer", include_str!("../../shaders/elastomer.wgsl")),
+    ("touched", include_str!("../../shaders/touched.wgsl")),
     ("camera", include_str!("../../shaders/camera.wgsl")),
     ("leds", include_str!("../../shaders/leds.wgsl")),
+    // Test support (Renderer::unproject_pixels), not a stage of a frame.
+    ("lens_rays", include_str!("../../shaders/lens_rays.wgsl")),
 ];
 
 /// The embedded shared files: `(path relative to shaders/, text)`.
@@ -47,6 +50,14 @@ pub const SHARED: &[(&str, &str)] = &[
     (
         "shared/shading.wgsl",
         include_str!("../../shaders/shared/shading.wgsl"),
+    ),
+    (
+        "shared/probes.wgsl",
+        include_str!("../../shaders/shared/probes.wgsl"),
+    ),
+    (
+        "shared/touched_list.wgsl",
+        include_str!("../../shaders/shared/touched_list.wgsl"),
     ),
 ];
 

@@ -1,7 +1,7 @@
 //! The whole pipeline on the CPU, stage by stage, from the CPU mirrors: slow (seconds per
 //! frame) but independent of any GPU, so tests can hold the GPU renderer to it.
 
-use super::{camera, contact, elastomer, leds, Contact, Frame, HeightfieldGrid, Rect};
+use super::{camera, contact, elastomer, leds, touched, Contact, Frame, HeightfieldGrid, Rect};
 use crate::error::Result;
 use crate::sensor::Sensor;
 use glam::DVec2;
@@ -44,7 +44,7 @@ pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
                 &meridian,
                 rect,
             );
-            normals = camera::skin_normals(&sensor.finger, &grid, &h, rect);
+            normals = elastomer::skin_normals(&sensor.finger, &grid, &h, rect);
             height = h;
             over = o;
         }
@@ -128,13 +128,13 @@ pub fn render_contact(
         &meridian,
         rect,
     );
-    let normals = camera::skin_normals(&sensor.finger, grid, &height, rect);
+    let normals = elastomer::skin_normals(&sensor.finger, grid, &height, rect);
     let Some(pixels) = footprint.pixels else {
         return Ok(frame);
     };
     let w = sensor.width;
-    let touched = camera::select_touched(sensor, grid, &height, pixels);
-    let shaded: Vec<(usize, [u8; 3], f32)> = touched
+    let touched_pixels = touched::select_touched(sensor, grid, &height, pixels);
+    let shaded: Vec<(usize, [u8; 3], f32)> = touched_pixels
         .par_iter()
         .map(|&i| {
             let pixel = DVec2::new((i % w) as f64, (i / w) as f64);

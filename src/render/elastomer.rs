@@ -4,13 +4,14 @@
 //! (the excess of a Gaussian twice as wide: wide), h = max(p, narrow) - bulge * max(wide -
 //! narrow, 0), capped to [-T/2, T]. Both Gaussians run as two separable passes along the
 //! surface, kernels in surface millimetres: along meridians (the disc's radial direction),
-//! then along parallels (circles about the axis). CPU mirror of `shaders/elastomer.wgsl`.
+//! then along parallels (circles about the axis). Then the normals of the skin they leave.
+//! CPU mirror of `shaders/elastomer.wgsl` (same names).
 
 use super::contact::parallel_radius;
 use super::{HeightfieldGrid, Rect};
 use crate::finger::{Finger, SurfaceCoord};
 use crate::sensor::{ElastomerConfig, SensorConfig};
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 
 /// Most kernel taps on each side of the centre.
 pub const MAX_BLEND_TAPS: i32 = 64;
@@ -240,6 +241,50 @@ pub fn skin_displacement(p: f64, blend: DVec2, thickness: f64, bulge: f64) -> f6
     } else {
         h
     }
+}
+
+/// Point of the deformed skin over disc position `disc`: S(u) - h(u) n(u).
+fn skin_at(finger: &Finger, grid: &HeightfieldGrid, height: &[f32], disc: DVec2) -> DVec3 {
+    let c = SurfaceCoord::from_disc(disc);
+    let sp = finger.point_at(c);
+    sp.point - sample_field(height, grid.texels, grid.texel_of(c.to_disc())) * sp.normal
+}
+
+/// Offsets of the deformed skin's outward normal from the undeformed one, per texel of
+/// `rect` (zero elsewhere): central differences of the skin S(u) - h(u) n(u) over one texel
+/// on the disc, which has no seam or pole. The camera interpolates these offsets bilinearly,
+/// so shading stays smooth across texels (differentiating the bilinear heightfield itself
+/// would give a normal that jumps at every texel edge).
+pub fn skin_normals(
+    finger: &Finger,
+    grid: &HeightfieldGrid,
+    height: &[f32],
+    rect: Rect,
+) -> Vec<DVec3> {
+    let n = grid.texels as usize;
+    let mut out = vec![DVec3::ZERO; n * n];
+    let e = grid.texel_mm();
+    let (ex, ey) = (DVec2::new(e, 0.0), DVec2::new(0.0, e));
+    for j in rect.y..rect.y + rect.h {
+        for i in rect.x..rect.x + rect.w {
+            let u = grid.texel_centre(i, j);
+            let c = SurfaceCoord::from_disc(u);
+            if c.s > grid.half_size_mm {
+                continue;
+            }
+            let n0 = finger.point_at(c).normal;
+            let dx = skin_at(finger, grid, height, u + ex) - skin_at(finger, grid, height, u - ex);
+            let dy = skin_at(finger, grid, height, u + ey) - skin_at(finger, grid, height, u - ey);
+            let mut normal = dx.cross(dy).normalize_or_zero();
+            if normal.dot(n0) < 0.0 {
+                normal = -normal;
+            }
+            if normal != DVec3::ZERO {
+                out[j as usize * n + i as usize] = normal - n0;
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@ pub mod elastomer;
 pub mod gpu;
 pub mod leds;
 pub mod pool;
+pub mod touched;
 pub mod uniforms;
 
 use crate::finger::Region;

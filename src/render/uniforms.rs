@@ -87,7 +87,8 @@ pub const GRID_OBJECT: u32 = 100;
 /// `object_kind` of the reference frame: no object, every pixel shaded (WGSL `REFERENCE_FRAME`).
 pub const REFERENCE_FRAME: u32 = 101;
 
-fn rect4(r: Option<Rect>) -> [u32; 4] {
+/// A rect as a uniform holds it: x, y, w, h (all zero without one).
+pub fn rect4(r: Option<Rect>) -> [u32; 4] {
     r.map(|r| [r.x, r.y, r.w, r.h]).unwrap_or([0; 4])
 }
 

@@ -1,0 +1,186 @@
+//! The renderer's bindings, in one table: [`BINDINGS`] makes both its one bind group layout
+//! and every bind group, and `shaders/shared/common.wgsl` declares the same bindings
+//! (`tests/shaders.rs` holds the table to the shader's names and kinds).
+
+use super::resources::{Map, Resources};
+
+/// What a binding holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Binding {
+    Sensor,
+    Frame,
+    Penetration,
+    ElastomerScratch,
+    Height,
+    Probes,
+    Image,
+    Indentation,
+    SdfGrid,
+    Counters,
+    PenetrationMap,
+    ElastomerMap,
+    HeightMap,
+    ProbeMap,
+    MapSampler,
+}
+
+/// Every binding of group 0, at its binding number.
+pub const BINDINGS: [Binding; 15] = [
+    Binding::Sensor,
+    Binding::Frame,
+    Binding::Penetration,
+    Binding::ElastomerScratch,
+    Binding::Height,
+    Binding::Probes,
+    Binding::Image,
+    Binding::Indentation,
+    Binding::SdfGrid,
+    Binding::Counters,
+    Binding::PenetrationMap,
+    Binding::ElastomerMap,
+    Binding::HeightMap,
+    Binding::ProbeMap,
+    Binding::MapSampler,
+];
+
+/// How a binding is declared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Uniform,
+    Storage {
+        read_only: bool,
+    },
+    /// A 2D texture of unfilterable floats.
+    Texture,
+    /// A non-filtering sampler.
+    Sampler,
+}
+
+impl Binding {
+    /// The variable the shaders bind it to.
+    pub fn wgsl_name(self) -> &'static str {
+        match self {
+            Binding::Sensor => "sensor",
+            Binding::Frame => "frame",
+            Binding::Penetration => "penetration",
+            Binding::ElastomerScratch => "elastomer_scratch",
+            Binding::Height => "height",
+            Binding::Probes => "probes",
+            Binding::Image => "image",
+            Binding::Indentation => "indentation",
+            Binding::SdfGrid => "sdf_grid",
+            Binding::Counters => "counters",
+            Binding::PenetrationMap => "penetration_map",
+            Binding::ElastomerMap => "elastomer_map",
+            Binding::HeightMap => "height_map",
+            Binding::ProbeMap => "probe_map",
+            Binding::MapSampler => "map_sampler",
+        }
+    }
+
+    pub fn kind(self) -> Kind {
+        match self {
+            Binding::Sensor | Binding::Frame => Kind::Uniform,
+            Binding::SdfGrid => Kind::Storage { read_only: true },
+            Binding::Penetration
+            | Binding::ElastomerScratch
+            | Binding::Height
+            | Binding::Probes
+            | Binding::Image
+            | Binding::Indentation
+            | Binding::Counters => Kind::Storage { read_only: false },
+            Binding::PenetrationMap
+            | Binding::ElastomerMap
+            | Binding::HeightMap
+            | Binding::ProbeMap => Kind::Texture,
+            Binding::MapSampler => Kind::Sampler,
+        }
+    }
+
+    fn layout_entry(self, binding: u32) -> wgpu::BindGroupLayoutEntry {
+        let buffer = |ty| wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let ty = match self.kind() {
+            Kind::Uniform => buffer(wgpu::BufferBindingType::Uniform),
+            Kind::Storage { read_only } => buffer(wgpu::BufferBindingType::Storage { read_only }),
+            Kind::Texture => wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            Kind::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+        };
+        wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty,
+            count: None,
+        }
+    }
+
+    fn resource<'a>(self, r: &'a Resources, f: &FrameBinding<'a>) -> wgpu::BindingResource<'a> {
+        let slice = |buffer: &'a wgpu::Buffer, bytes: u64| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset: f.slot * bytes,
+                size: std::num::NonZeroU64::new(bytes),
+            })
+        };
+        let map = |m: Map| wgpu::BindingResource::TextureView(&r.heightfield.map(m).view);
+        match self {
+            Binding::Sensor => r.sensor.as_entire_binding(),
+            Binding::Frame => f.uniform.as_entire_binding(),
+            Binding::Penetration => r.heightfield.buffer(Map::Penetration).as_entire_binding(),
+            Binding::ElastomerScratch => r.heightfield.buffer(Map::Elastomer).as_entire_binding(),
+            Binding::Height => r.heightfield.buffer(Map::Height).as_entire_binding(),
+            Binding::Probes => r.probes.as_entire_binding(),
+            Binding::Image => slice(&r.image, r.slot_bytes),
+            Binding::Indentation => slice(&r.indentation, r.slot_bytes),
+            Binding::SdfGrid => f.grid.as_entire_binding(),
+            Binding::Counters => slice(&r.counters, r.counter_bytes),
+            Binding::PenetrationMap => map(Map::Penetration),
+            Binding::ElastomerMap => map(Map::Elastomer),
+            Binding::HeightMap => map(Map::Height),
+            Binding::ProbeMap => wgpu::BindingResource::TextureView(&r.probe_map.view),
+            Binding::MapSampler => wgpu::BindingResource::Sampler(&r.map_sampler),
+        }
+    }
+}
+
+/// The layout's entries, from [`BINDINGS`].
+pub(super) fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+    (0..)
+        .zip(BINDINGS)
+        .map(|(binding, b)| b.layout_entry(binding))
+        .collect()
+}
+
+/// What differs between the bind groups: the frame uniform, the frame's slot of a
+/// submission (its slices of the image, indentation and counters buffers), and the SDF grid
+/// its contact pass traces (a loaded mesh's, else an empty one).
+pub(super) struct FrameBinding<'a> {
+    pub uniform: &'a wgpu::Buffer,
+    pub slot: u64,
+    pub grid: &'a wgpu::Buffer,
+}
+
+impl Resources {
+    /// A bind group over every binding of [`BINDINGS`].
+    pub(super) fn bind_group(&self, device: &wgpu::Device, f: FrameBinding) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = (0..)
+            .zip(BINDINGS)
+            .map(|(binding, b)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.resource(self, &f),
+            })
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("geltip frame"),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+}

@@ -1,0 +1,375 @@
+//! The one frame path: a submission of up to [`MAX_BATCH`] frames, each a scene of one or
+//! more contacts (a batch's frame is a scene of one). Per frame, every object's contact pass
+//! over its own pressed rect (each texel keeps the deepest press); the elastomer's passes
+//! over the union of the footprints, split into disjoint rectangles (the cost follows the
+//! footprints' area, not the number of objects); then the touched pixels of the union of
+//! their pixel rects, cast, shaded and given noise. Each contact's labels come from its own
+//! penetration field, read back with the frames in the same round trip.
+
+use super::bindings::FrameBinding;
+use super::layout::{COUNTER_HEADER_BYTES, DEEP_COUNT, OVER_PRESSED, SHALLOW_COUNT, TILE_COUNT};
+use super::prepare::{too_many, Prepared};
+use super::readback::ReadFrames;
+use super::record::{Recorder, Stage};
+use super::resources::held_bytes;
+use super::stages::ContactPass;
+use super::{Renderer, Timings, MAX_BATCH};
+use crate::error::Result;
+use crate::object::Object;
+use crate::render::uniforms::{rect4, FrameUniform};
+use crate::render::{Frame, GroundTruth, Rect};
+use std::time::{Duration, Instant};
+
+/// A frame to render: its contacts and its noise seed.
+pub(super) type Scene = (Vec<Prepared>, u32);
+
+/// Where a frame's work lies, from its contacts' footprints.
+pub(super) struct FramePlan {
+    /// Its place in the submission: its slices of the image, indentation and counters.
+    pub slot: u64,
+    /// The heightfield texels its contacts can move (the parallels pass and the skin
+    /// normals run over these), and those the meridians pass runs over: disjoint pieces.
+    pub texels: Vec<Rect>,
+    pub meridians: Vec<Rect>,
+    /// The pixels that can see those texels: the span the tile list is chosen from.
+    pub pixels: Option<Rect>,
+    /// The rect of the image the frame's buffers hold ([`Renderer::changed_rect`]).
+    pub holding: Option<Rect>,
+    /// The texels cleared before its contact passes, whose maps each stage refreshes: its
+    /// texels' span and whatever the maps still hold from the frame before, so that they
+    /// are zero outside its texels afterwards.
+    pub region: Option<Rect>,
+    /// Its frame uniform: the first contact's, holding its image rect, its noise seed, and
+    /// as its rects the spans of the pieces. A piece's pass binds it with the piece as its
+    /// rect (each stage reads only the rect it runs over: `shaders/shared/common.wgsl`).
+    pub uniform: FrameUniform,
+}
+
+/// A frame's bind groups, as indices into [`BindGroups::groups`].
+pub(super) struct FrameBinds {
+    contacts: Vec<usize>,
+    frame: usize,
+    texels: Vec<usize>,
+    meridians: Vec<usize>,
+}
+
+/// A submission's bind groups, each over a uniform buffer of its own. The passes of a frame
+/// whose uniforms are equal share one: a frame of one contact binds one for all its passes.
+#[derive(Default)]
+pub(super) struct BindGroups {
+    pub groups: Vec<wgpu::BindGroup>,
+    uniforms: Vec<(u64, FrameUniform)>,
+}
+
+/// The smallest rect covering `rects`.
+fn span(rects: &[Rect]) -> Option<Rect> {
+    rects.iter().copied().reduce(|a, b| a.union(&b))
+}
+
+impl BindGroups {
+    /// A contact's: its own, as it binds its object's SDF grid.
+    fn contact(&mut self, r: &Renderer, slot: u64, u: FrameUniform, object: &Object) -> usize {
+        let grid = r.resources.grid_of(object);
+        self.push(r, slot, u, grid)
+    }
+
+    /// One for uniform `u` in frame `slot`: the frame's bind group of an equal uniform if it
+    /// has one (whatever SDF grid it binds: only the contact passes read it).
+    fn shared(&mut self, r: &Renderer, slot: u64, u: FrameUniform) -> usize {
+        let same = |(s, v): &(u64, FrameUniform)| {
+            *s == slot && bytemuck::bytes_of(v) == bytemuck::bytes_of(&u)
+        };
+        match self.uniforms.iter().position(same) {
+            Some(k) => k,
+            None => self.push(r, slot, u, &r.resources.empty_grid),
+        }
+    }
+
+    fn push(&mut self, r: &Renderer, slot: u64, u: FrameUniform, grid: &wgpu::Buffer) -> usize {
+        let uniform = r.uniform_buffer(&u);
+        let binding = FrameBinding {
+            uniform: &uniform,
+            slot,
+            grid,
+        };
+        self.groups
+            .push(r.resources.bind_group(&r.ctx.device, binding));
+        self.uniforms.push((slot, u));
+        self.groups.len() - 1
+    }
+
+    /// The bind groups of `plan`'s frame of `contacts`.
+    fn frame(&mut self, r: &Renderer, plan: &FramePlan, contacts: &[Prepared]) -> FrameBinds {
+        let slot = plan.slot;
+        let contacts = contacts
+            .iter()
+            .map(|p| {
+                let mut u = p.uniform.holding(plan.holding);
+                u.noise_seed = plan.uniform.noise_seed;
+                self.contact(r, slot, u, &p.press.object)
+            })
+            .collect();
+        let frame = self.shared(r, slot, plan.uniform);
+        let mut piece = |f: &dyn Fn(&mut FrameUniform)| {
+            let mut u = plan.uniform;
+            f(&mut u);
+            self.shared(r, slot, u)
+        };
+        let texels = plan
+            .texels
+            .iter()
+            .map(|&t| piece(&|u| u.texel_rect = rect4(Some(t))))
+            .collect();
+        let meridians = plan
+            .meridians
+            .iter()
+            .map(|&m| piece(&|u| u.meridian_rect = rect4(Some(m))))
+            .collect();
+        FrameBinds {
+            contacts,
+            frame,
+            texels,
+            meridians,
+        }
+    }
+}
+
+impl Renderer {
+    /// Renders `scenes` in one submission, a frame each: each frame with its contacts'
+    /// labels, in order. `prepare` is the CPU's time before (for [`Renderer::timings`]).
+    pub(super) fn render_frames(
+        &mut self,
+        scenes: Vec<Scene>,
+        prepare: Duration,
+    ) -> Result<Vec<(Frame, Vec<GroundTruth>)>> {
+        if scenes.len() > MAX_BATCH {
+            return Err(too_many(scenes.len()));
+        }
+        for (contacts, _) in &scenes {
+            for p in contacts {
+                self.ready_object(p.uniform.object_kind, &p.press.object)?;
+            }
+        }
+        let start = Instant::now();
+        let ran = self.run_frames(&scenes);
+        let read = self.forget_heightfield_on_error(ran)?;
+        let mut timings = Timings {
+            prepare,
+            render: read.mapped - start,
+            ..Timings::default()
+        };
+        let mut fields = read.fields.into_iter();
+        let mut out = Vec::with_capacity(scenes.len());
+        for ((contacts, _), part) in scenes.iter().zip(read.frames) {
+            let c = &part.counters;
+            timings.touched_pixels +=
+                c[SHALLOW_COUNT as usize] as u64 + c[DEEP_COUNT as usize] as u64;
+            timings.listed_tiles += c[TILE_COUNT as usize] as u64;
+            let over_pressed = c[OVER_PRESSED as usize] > 0;
+            let frame = Frame {
+                width: self.sensor.width,
+                height: self.sensor.height,
+                rgba: part.rgba,
+                indentation: part.indentation,
+            };
+            let truths = contacts
+                .iter()
+                .map(|p| {
+                    let field = fields.next().unwrap_or_default();
+                    let mut truth = p.labels(&self.sensor, &self.grid, &field);
+                    // Only a contact's pixel rect is ever indented: its mask is counted there.
+                    let (count, bbox) = p.pixel_rect().map_or((0, None), |r| frame.mask_in(r));
+                    truth.mask_pixels = count;
+                    truth.mask_bbox = bbox;
+                    truth.over_pressed = over_pressed;
+                    truth
+                })
+                .collect();
+            out.push((frame, truths));
+        }
+        timings.readback = read.mapped.elapsed();
+        self.timings = timings;
+        Ok(out)
+    }
+
+    /// Plans, records, submits and reads back the frames of `scenes`.
+    fn run_frames(&mut self, scenes: &[Scene]) -> Result<ReadFrames> {
+        let contacts: Vec<&Prepared> = scenes.iter().flat_map(|(c, _)| c).collect();
+        let offsets = self.field_offsets(&contacts);
+        let plans: Vec<FramePlan> = (0..)
+            .zip(scenes)
+            .map(|(slot, (contacts, seed))| self.plan(slot, contacts, *seed))
+            .collect();
+        let (groups, binds) = self.bind_frames(&plans, scenes.iter().map(|(c, _)| &c[..]));
+        let mut rec = Recorder::new(self.ctx, &self.resources.dispatch_args);
+        let mut at = offsets.as_slice();
+        for ((plan, binds), (contacts, _)) in plans.iter().zip(&binds).zip(scenes) {
+            let (mine, rest) = at.split_at(contacts.len());
+            self.record_frame(&mut rec, plan, contacts, binds, &groups.groups, mine)?;
+            at = rest;
+        }
+        let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
+        let fields: Vec<Option<(u64, u64)>> = contacts
+            .iter()
+            .zip(offsets)
+            .map(|(p, at)| p.footprint.map(|_| (at, p.field_bytes(self.grid.texels))))
+            .collect();
+        self.read_frames("rendering contacts", rec.finish(), &rects, &fields)
+    }
+
+    /// Where each contact's own penetration goes in the penetration fields, packed in order
+    /// (which are made to hold them all).
+    pub(super) fn field_offsets(&mut self, contacts: &[&Prepared]) -> Vec<u64> {
+        let mut offsets = Vec::with_capacity(contacts.len());
+        let mut bytes = 0;
+        for p in contacts {
+            offsets.push(bytes);
+            bytes += p.field_bytes(self.grid.texels);
+        }
+        self.resources.reserve_fields(self.ctx, bytes);
+        offsets
+    }
+
+    /// The bind groups of the frames `plans` plan, of the contacts of each.
+    pub(super) fn bind_frames<'c>(
+        &self,
+        plans: &[FramePlan],
+        contacts: impl Iterator<Item = &'c [Prepared]>,
+    ) -> (BindGroups, Vec<FrameBinds>) {
+        let mut groups = BindGroups::default();
+        let binds = plans
+            .iter()
+            .zip(contacts)
+            .map(|(plan, contacts)| groups.frame(self, plan, contacts))
+            .collect();
+        (groups, binds)
+    }
+
+    /// The plan of the frame of `contacts` in `slot`; the heightfield's bookkeeping moves on
+    /// to it (the frames of a submission run in order).
+    pub(super) fn plan(&mut self, slot: u64, contacts: &[Prepared], seed: u32) -> FramePlan {
+        let footprints: Vec<_> = contacts.iter().filter_map(|p| p.footprint).collect();
+        let texels = Rect::disjoint(footprints.iter().map(|f| f.texels));
+        let meridians = Rect::disjoint(footprints.iter().map(|f| f.meridians));
+        let pixels = span(&Rect::disjoint(
+            contacts.iter().filter_map(|p| p.pixel_rect()),
+        ));
+        let texel_span = span(&texels);
+        let holding = self.changed_rect(pixels);
+        let region = texel_span.map(|t| {
+            let region = self.dirty.map_or(t, |d| d.union(&t));
+            self.dirty = Some(t);
+            region
+        });
+        let mut uniform = contacts
+            .first()
+            .map_or(FrameUniform::reference(&self.sensor, seed), |p| p.uniform)
+            .holding(holding);
+        uniform.noise_seed = seed;
+        uniform.texel_rect = rect4(texel_span);
+        uniform.pixel_rect = rect4(pixels);
+        uniform.meridian_rect = rect4(span(&meridians));
+        FramePlan {
+            slot,
+            texels,
+            meridians,
+            pixels,
+            holding,
+            region,
+            uniform,
+        }
+    }
+
+    /// Records one frame's stages, in order, marking each stage's end for a profile.
+    pub(super) fn record_frame<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        plan: &FramePlan,
+        contacts: &[Prepared],
+        binds: &FrameBinds,
+        groups: &'a [wgpu::BindGroup],
+        field_offsets: &[u64],
+    ) -> Result<()> {
+        let (res, p) = (&self.resources, &self.pipelines);
+        let pieces = |rects: &[Rect], binds: &[usize]| -> Vec<(Rect, &'a wgpu::BindGroup)> {
+            rects
+                .iter()
+                .zip(binds)
+                .map(|(&r, &k)| (r, &groups[k]))
+                .collect()
+        };
+        let frame = &groups[binds.frame];
+        self.record_frame_start(rec.encoder(), plan);
+        rec.stage_done(Stage::Start)?;
+        let texels = pieces(&plan.texels, &binds.texels);
+        if let Some(region) = plan.region {
+            let passes: Vec<ContactPass> = contacts
+                .iter()
+                .zip(&binds.contacts)
+                .zip(field_offsets)
+                .filter_map(|((c, &k), &at)| {
+                    c.footprint.map(|f| ContactPass {
+                        bind: &groups[k],
+                        kind: c.uniform.object_kind,
+                        pressed: f.pressed,
+                        field_offset: at,
+                    })
+                })
+                .collect();
+            p.contact.record(rec, res, &passes, region)?;
+            rec.stage_done(Stage::Contact)?;
+            let meridians = pieces(&plan.meridians, &binds.meridians);
+            p.elastomer.record_meridians(rec, res, &meridians, region);
+            rec.stage_done(Stage::Meridians)?;
+            p.elastomer.record_parallels(rec, res, &texels, region);
+            rec.stage_done(Stage::Parallels)?;
+            p.elastomer.record_normals(rec, &texels);
+        } else {
+            for stage in [Stage::Contact, Stage::Meridians, Stage::Parallels] {
+                rec.stage_done(stage)?;
+            }
+        }
+        rec.stage_done(Stage::SkinNormals)?;
+        // The tile list joins the normals' pass (both read the height map alone); the
+        // normals' map is refreshed after it.
+        if let Some(pixels) = plan.pixels {
+            p.touched.record_tiles(rec, pixels, frame);
+        }
+        if let Some(region) = plan.region {
+            p.elastomer.refresh_normals(rec, res, region);
+        }
+        if plan.pixels.is_some() {
+            p.touched.record_listed(rec, res, plan.slot, frame);
+        }
+        rec.stage_done(Stage::Select)?;
+        if plan.pixels.is_some() {
+            p.camera.record_touched(rec, res, plan.slot, frame);
+        }
+        if self.sensor.config.render.noise > 0.0 {
+            let size = (self.sensor.width, self.sensor.height);
+            p.leds.record_noise(rec, frame, size);
+        }
+        rec.stage_done(Stage::Touched)
+    }
+
+    /// A frame's start: its image buffers hold its rect of the image, the reference's
+    /// pixels there and zero indentation; its counters are zero (the touched list itself
+    /// needs no clearing: only the places its counts hold are read); and the heightfield is
+    /// zero over its region.
+    fn record_frame_start(&self, encoder: &mut wgpu::CommandEncoder, plan: &FramePlan) {
+        let res = &self.resources;
+        if let Some(r) = plan.holding {
+            let offset = plan.slot * res.slot_bytes;
+            res.copy_reference(encoder, offset, r);
+            encoder.clear_buffer(&res.indentation, offset, Some(held_bytes(r)));
+        }
+        encoder.clear_buffer(
+            &res.counters,
+            plan.slot * res.counter_bytes,
+            Some(COUNTER_HEADER_BYTES),
+        );
+        if let Some(region) = plan.region {
+            res.heightfield.clear(encoder, Some(region));
+        }
+    }
+}

@@ -1,0 +1,284 @@
+//! The GPU renderer: the stages as compute pipelines over one bind group layout. The empty
+//! finger is rendered once; each frame copies it and re-renders only the pixels that can
+//! see its contacts' footprints: of the footprints' pixel rectangle, the tiles whose rays'
+//! probes read a displaced texel are listed, of those the pixels whose rays the deformation
+//! reaches, and the camera casts and shades that list alone, sized on the GPU (indirect
+//! dispatch). The frames of a submission are recorded into one submission, each into its
+//! own slice of the output buffers, and read back together.
+//!
+//! - `resources.rs` and `pipelines.rs`: everything the renderer binds and runs, made in one
+//!   place; [`bindings`]: the one table of bindings; [`layout`]: where the shaders put
+//!   things (held to `shaders/` by `tests/shaders.rs`).
+//! - `frame.rs`: the one frame path; `stages.rs`: each stage's passes; `record.rs`: passes
+//!   and profiling; `readback.rs`: frames back to the CPU; `prepare.rs`: the CPU's share.
+//! - `reference.rs`: the empty finger; `profile.rs`, `rays.rs`, `streams.rs`: the profile
+//!   of a frame, the lens rays for tests, renderers on devices of their own.
+
+pub mod bindings;
+mod frame;
+pub mod layout;
+mod pipelines;
+mod prepare;
+mod profile;
+mod rays;
+mod readback;
+mod record;
+mod reference;
+mod resources;
+mod stages;
+mod streams;
+
+pub use prepare::{PreparedBatch, Preparer};
+
+use crate::error::Result;
+use crate::gpu::GpuContext;
+use crate::object::Object;
+use crate::render::uniforms::{object_kind, FrameUniform, SensorUniform};
+use crate::render::{Contact, Frame, GroundTruth, HeightfieldGrid, Press, Rect};
+use crate::sensor::Sensor;
+use pipelines::Pipelines;
+use resources::{whole_image, Resources};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use wgpu::util::DeviceExt;
+
+/// Frames recorded into one submission at most.
+pub const MAX_BATCH: usize = 8;
+
+/// Seconds spent in each phase of the last batch.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Timings {
+    /// CPU work before recording: poses, footprints, uniforms.
+    pub prepare: Duration,
+    /// Recording, submitting and waiting for the GPU work, which ends with copying the
+    /// frames to mappable memory (one submission, one wait), and mapping them; while the GPU
+    /// works, the frames' pixels that come from the reference are laid out.
+    pub render: Duration,
+    /// Unpacking the mapped frames into images and labels.
+    pub readback: Duration,
+    /// Pixels the camera and LED stages re-rendered (the touched lists' lengths), summed.
+    pub touched_pixels: u64,
+    /// Tiles of 8 x 8 pixels whose pixels the touched lists were chosen from (the tile
+    /// lists' lengths), summed.
+    pub listed_tiles: u64,
+}
+
+impl Timings {
+    /// Adds `other`'s phases and pixels to these (totals over several batches or frames).
+    pub fn add(&mut self, other: &Timings) {
+        self.prepare += other.prepare;
+        self.render += other.render;
+        self.readback += other.readback;
+        self.touched_pixels += other.touched_pixels;
+        self.listed_tiles += other.listed_tiles;
+    }
+}
+
+/// A renderer for one sensor.
+pub struct Renderer {
+    ctx: &'static GpuContext,
+    sensor: Sensor,
+    grid: HeightfieldGrid,
+    resources: Resources,
+    pipelines: Pipelines,
+    /// Texels the heightfield's maps may hold non-zero (the last frame's texel span).
+    dirty: Option<Rect>,
+    reference: Frame,
+    /// Frames given noise so far: each draws its seed from it ([`Self::next_noise_seed`]).
+    seed_counter: u32,
+    timings: Timings,
+}
+
+impl Renderer {
+    /// Compiles the pipelines, allocates the buffers and renders the empty finger once, on
+    /// the process's shared device.
+    pub fn new(sensor: &Sensor) -> Result<Renderer> {
+        Renderer::on(sensor, GpuContext::shared()?)
+    }
+
+    /// As [`Renderer::new`], on the device of `ctx` (e.g. [`GpuContext::stream`]: renderers
+    /// on different devices render at the same time).
+    pub fn on(sensor: &Sensor, ctx: &'static GpuContext) -> Result<Renderer> {
+        let grid = HeightfieldGrid::for_sensor(sensor);
+        let resources = Resources::new(ctx, sensor, &grid)?;
+        let constants = SensorUniform::new(sensor, &grid).pipeline_constants();
+        let pipelines = Pipelines::new(ctx, &resources.pipeline_layout, constants)?;
+        let mut renderer = Renderer {
+            ctx,
+            sensor: sensor.clone(),
+            grid,
+            resources,
+            pipelines,
+            dirty: None,
+            reference: Frame {
+                width: sensor.width,
+                height: sensor.height,
+                rgba: Vec::new(),
+                indentation: Vec::new(),
+            },
+            seed_counter: 0,
+            timings: Timings::default(),
+        };
+        renderer.render_reference()?;
+        Ok(renderer)
+    }
+
+    /// The sensor this renderer draws.
+    pub fn sensor(&self) -> &Sensor {
+        &self.sensor
+    }
+
+    /// The heightfield grid.
+    pub fn grid(&self) -> &HeightfieldGrid {
+        &self.grid
+    }
+
+    /// The empty finger (noise-free), as rendered once at start-up.
+    pub fn reference(&self) -> &Frame {
+        &self.reference
+    }
+
+    /// Timings of the last call to [`Renderer::render_batch`] (or the reference).
+    pub fn timings(&self) -> Timings {
+        self.timings
+    }
+
+    /// The adapter in use, for logs and benchmarks.
+    pub fn adapter(&self) -> &wgpu::AdapterInfo {
+        &self.ctx.adapter_info
+    }
+
+    /// Prepares contacts off the renderer: a [`Preparer`] works on its own thread (the pose
+    /// and footprint searches are CPU work the GPU waits for) while the renderer renders the
+    /// batch before.
+    pub fn preparer(&self) -> Preparer {
+        Preparer {
+            sensor: self.sensor.clone(),
+            grid: self.grid,
+        }
+    }
+
+    /// Builds the contact stage's pipelines for `objects` now rather than at their first
+    /// frame (each kind of object has its own). For runs that time their frames, such as
+    /// `geltip dataset`.
+    pub fn ready_objects(&mut self, objects: &[Arc<Object>]) -> Result<()> {
+        for object in objects {
+            self.pipelines
+                .ready_contact(self.ctx, object_kind(object))?;
+        }
+        Ok(())
+    }
+
+    /// Renders one contact.
+    pub fn render(&mut self, contact: &Contact) -> Result<(Frame, GroundTruth)> {
+        let mut out = self.render_batch(std::slice::from_ref(contact))?;
+        Ok(out.remove(0))
+    }
+
+    /// Renders contacts in batches of up to [`MAX_BATCH`] per submission.
+    pub fn render_batch(&mut self, contacts: &[Contact]) -> Result<Vec<(Frame, GroundTruth)>> {
+        let mut out = Vec::with_capacity(contacts.len());
+        let mut total = Timings::default();
+        let preparer = self.preparer();
+        for chunk in contacts.chunks(MAX_BATCH) {
+            let start = Instant::now();
+            let batch = preparer.prepare(chunk)?;
+            total.prepare += start.elapsed();
+            out.extend(self.render_prepared(batch)?);
+            total.add(&self.timings);
+        }
+        self.timings = total;
+        Ok(out)
+    }
+
+    /// Renders a batch a [`Preparer`] prepared (at most [`MAX_BATCH`] contacts, in one
+    /// submission), a frame each, each frame drawing its noise seed in turn.
+    pub fn render_prepared(&mut self, batch: PreparedBatch) -> Result<Vec<(Frame, GroundTruth)>> {
+        if batch.0.len() > MAX_BATCH {
+            return Err(prepare::too_many(batch.0.len()));
+        }
+        let scenes = batch
+            .0
+            .into_iter()
+            .map(|p| (vec![p], self.next_noise_seed()))
+            .collect();
+        let frames = self.render_frames(scenes, Duration::ZERO)?;
+        Ok(frames
+            .into_iter()
+            .filter_map(|(frame, truths)| Some((frame, truths.into_iter().next()?)))
+            .collect())
+    }
+
+    /// Renders several objects pressed into the finger at once, as one frame: the skin is
+    /// pushed by whichever object is deepest at each texel, and the elastomer, camera and LED
+    /// stages run once over the union of the footprints. One label per press, in order: its
+    /// mask is the pressed pixels inside its own footprint's pixel rectangle; `over_pressed`
+    /// is the frame's (any object against the shell).
+    pub fn render_scene(&mut self, presses: &[Press]) -> Result<(Frame, Vec<GroundTruth>)> {
+        let start = Instant::now();
+        // Drawn before the presses are checked: a refused scene takes its seed too.
+        let seed = self.next_noise_seed();
+        let prepared = self.preparer().prepare_scene(presses)?;
+        let mut frames = self.render_frames(vec![(prepared, seed)], start.elapsed())?;
+        Ok(frames.remove(0))
+    }
+
+    /// A frame with no contact, as the camera would take it: the cached reference, with
+    /// fresh sensor noise when the sensor has noise (each call draws new noise, like a real
+    /// reference frame; without noise it is the reference itself).
+    pub fn render_empty(&mut self) -> Result<Frame> {
+        if self.sensor.config.render.noise <= 0.0 {
+            return Ok(self.reference.clone());
+        }
+        let seed = self.next_noise_seed();
+        let timings = self.timings;
+        let frames = self.render_frames(vec![(Vec::new(), seed)], Duration::ZERO);
+        self.timings = timings;
+        Ok(frames?.remove(0).0)
+    }
+
+    /// The seed of the next frame's sensor noise: the sensor's seed, mixed with a count of
+    /// the frames drawn so far.
+    fn next_noise_seed(&mut self) -> u32 {
+        self.seed_counter = self.seed_counter.wrapping_add(1);
+        self.sensor.config.render.noise_seed ^ self.seed_counter.wrapping_mul(0x9E37_79B9)
+    }
+
+    /// What the GPU needs before it renders a contact's object: the contact pipeline of its
+    /// kind (`kind`) and, for a mesh, its baked SDF grid.
+    fn ready_object(&mut self, kind: u32, object: &Arc<Object>) -> Result<()> {
+        self.pipelines.ready_contact(self.ctx, kind)?;
+        self.resources.upload_grid(self.ctx, object);
+        Ok(())
+    }
+
+    /// The rect of the image a frame can change: its pixel rect, or every pixel when the
+    /// sensor adds noise. The rest of the frame is the reference's, which the CPU keeps, so
+    /// only this rect is copied, cleared and read back (its rows
+    /// [`crate::render::uniforms::image_pitch`] apart).
+    fn changed_rect(&self, pixel_rect: Option<Rect>) -> Option<Rect> {
+        if self.sensor.config.render.noise > 0.0 {
+            return Some(whole_image(&self.sensor));
+        }
+        pixel_rect.filter(|r| r.w > 0 && r.h > 0)
+    }
+
+    fn uniform_buffer(&self, u: &FrameUniform) -> wgpu::Buffer {
+        self.ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("geltip frame uniform"),
+                contents: bytemuck::bytes_of(u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+    }
+
+    /// After a failed frame the heightfield's state is unknown (the recorded clears may
+    /// never have run, or run in part): the next frame clears all of it.
+    fn forget_heightfield_on_error<T>(&mut self, result: Result<T>) -> Result<T> {
+        if result.is_err() {
+            self.dirty = Some(self.resources.heightfield.whole());
+        }
+        result
+    }
+}

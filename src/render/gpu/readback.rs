@@ -1,0 +1,140 @@
+//! Reading frames back: the copies ride in the submission of the work they read, so a
+//! submission costs one round trip, and each frame's image and indentation are read over
+//! the rect its buffers hold (the reference's pixels and zero indentation elsewhere).
+
+use super::layout::COUNTER_HEADER_BYTES;
+use super::resources::held_bytes;
+use super::Renderer;
+use crate::error::{GeltipError, Result};
+use crate::gpu::readback::{
+    read_buffer, record_ranges, staging_bytes, staging_or_fresh, unpack_ranges, unpadded_rows,
+};
+use crate::render::uniforms::image_pitch;
+use crate::render::Rect;
+use std::time::Instant;
+
+/// A frame's data as read back.
+pub(super) struct FrameParts {
+    pub rgba: Vec<u8>,
+    pub indentation: Vec<f32>,
+    /// The counters before the touched list (`super::layout`).
+    pub counters: Vec<u32>,
+}
+
+/// What [`Renderer::read_frames`] gives: each frame's parts, each contact's penetration
+/// field, and when the submission's work was done and mapped (render time ends there).
+pub(super) struct ReadFrames {
+    pub frames: Vec<FrameParts>,
+    pub fields: Vec<Vec<f32>>,
+    pub mapped: Instant,
+}
+
+impl Renderer {
+    /// Submits `encoder` (the work that renders frames `0..rects.len()` of a submission)
+    /// with the copies that read them back appended, waits once and unpacks: per frame, its
+    /// image and indentation (read over its rect, which its buffers hold) and its counters;
+    /// then the contacts' penetration fields over `fields` (byte ranges of the penetration
+    /// fields; an empty field for `None`).
+    pub(super) fn read_frames(
+        &self,
+        what: &str,
+        mut encoder: wgpu::CommandEncoder,
+        rects: &[Option<Rect>],
+        fields: &[Option<(u64, u64)>],
+    ) -> Result<ReadFrames> {
+        let (width, height) = (self.sensor.width, self.sensor.height);
+        if let Some(r) = rects
+            .iter()
+            .flatten()
+            .find(|r| r.x + r.w > width || r.y + r.h > height)
+        {
+            return Err(GeltipError::Gpu(format!(
+                "a frame's rect {r:?} reaches beyond the {width}x{height} image"
+            )));
+        }
+        let res = &self.resources;
+        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> =
+            Vec::with_capacity(3 * rects.len() + fields.len());
+        for (k, rect) in (0..).zip(rects) {
+            let slot = k * res.slot_bytes;
+            let bytes = rect.map_or(0, held_bytes);
+            ranges.push((&res.image, slot, bytes));
+            ranges.push((&res.indentation, slot, bytes));
+            ranges.push((&res.counters, k * res.counter_bytes, COUNTER_HEADER_BYTES));
+        }
+        for &(offset, bytes) in fields.iter().map(|f| f.as_ref().unwrap_or(&(0, 0))) {
+            ranges.push((&res.penetration_fields, offset, bytes));
+        }
+        // The kept staging buffer holds a full batch; a scene of very many contacts may need
+        // more for its fields.
+        let mut fresh = None;
+        let total = staging_bytes(&ranges)?;
+        let staging = staging_or_fresh(self.ctx, Some(&res.staging), total, &mut fresh);
+        record_ranges(&mut encoder, staging, &ranges)?;
+        let submission = self.ctx.submit(what, encoder)?;
+        // Each frame as the reference's pixels and zero indentation, laid out while the GPU
+        // works: this thread would only wait, and after the wait only the rects read are
+        // left to copy over them.
+        let pixels = width as usize * height as usize;
+        let mut frames: Vec<FrameParts> = rects
+            .iter()
+            .map(|_| FrameParts {
+                rgba: self.reference.rgba.clone(),
+                indentation: vec![0.0; pixels],
+                counters: Vec::new(),
+            })
+            .collect();
+        let mut read_fields = vec![Vec::new(); fields.len()];
+        let mut mapped = None;
+        let frame_ranges = 3 * rects.len();
+        unpack_ranges(self.ctx, staging, &ranges, submission, |k, bytes| {
+            mapped.get_or_insert_with(Instant::now);
+            if k >= frame_ranges {
+                read_fields[k - frame_ranges] = bytemuck::pod_collect_to_vec(bytes);
+                return;
+            }
+            let (frame, rect) = (&mut frames[k / 3], rects[k / 3]);
+            match (k % 3, rect) {
+                (0, Some(r)) => {
+                    let rgba = bytemuck::cast_slice_mut::<u8, [u8; 4]>(&mut frame.rgba);
+                    paste_rows(rgba, width, r, bytes, |b| b);
+                }
+                (1, Some(r)) => {
+                    paste_rows(&mut frame.indentation, width, r, bytes, f32::from_ne_bytes)
+                }
+                (2, _) => frame.counters = bytemuck::pod_collect_to_vec(bytes),
+                _ => {}
+            }
+        })?;
+        Ok(ReadFrames {
+            frames,
+            fields: read_fields,
+            mapped: mapped.unwrap_or_else(Instant::now),
+        })
+    }
+
+    /// The image in the first frame's slice of the image buffer, all of it (rows
+    /// [`image_pitch`] apart there).
+    pub(super) fn read_whole_image(&self) -> Result<Vec<u8>> {
+        let (w, h) = (self.sensor.width as usize, self.sensor.height as usize);
+        let pitch = image_pitch(self.sensor.width) as usize * 4;
+        let padded: Vec<u8> = read_buffer(self.ctx, &self.resources.image, 0, h * pitch)?;
+        Ok(unpadded_rows(&padded, w * 4, pitch)
+            .flatten()
+            .copied()
+            .collect())
+    }
+}
+
+/// Each row of rect `r` as read back (`bytes`: its rows [`image_pitch`] pixels apart) into
+/// its place in `image`, a whole image `width` pixels wide, a pixel from each 4 bytes.
+fn paste_rows<T>(image: &mut [T], width: u32, r: Rect, bytes: &[u8], pixel: impl Fn([u8; 4]) -> T) {
+    let pitch = image_pitch(r.w) as usize * 4;
+    for (j, row) in (r.y as usize..).zip(unpadded_rows(bytes, r.w as usize * 4, pitch)) {
+        let at = j * width as usize + r.x as usize;
+        let to = image.get_mut(at..).unwrap_or_default();
+        for (p, b) in to.iter_mut().zip(row.chunks_exact(4)) {
+            *p = pixel([b[0], b[1], b[2], b[3]]);
+        }
+    }
+}

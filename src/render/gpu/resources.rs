@@ -1,0 +1,484 @@
+//! Every buffer, texture and sampler the renderer uses, and its bind group layout, made in
+//! one place ([`Resources::new`]) once the device is known to hold them.
+
+use super::bindings::layout_entries;
+use super::layout::{
+    COUNTER_HEADER_BYTES, DISPATCH_ARGS_BYTES, PROBES_BYTES_PER_PIXEL, PROBE_TILE_BYTES,
+};
+use super::MAX_BATCH;
+use crate::error::{GeltipError, Result};
+use crate::gpu::GpuContext;
+use crate::object::Object;
+use crate::render::touched::tile_grid;
+use crate::render::uniforms::{image_pitch, SensorUniform};
+use crate::render::{HeightfieldGrid, Rect};
+use crate::sensor::Sensor;
+use std::collections::HashMap;
+use std::sync::Arc;
+use wgpu::util::DeviceExt;
+
+/// Baked SDF grids of loaded meshes kept on the GPU at most.
+const MAX_CACHED_GRIDS: usize = 16;
+
+pub(super) struct Resources {
+    pub layout: wgpu::BindGroupLayout,
+    pub pipeline_layout: wgpu::PipelineLayout,
+    pub sensor: wgpu::Buffer,
+    pub heightfield: Heightfield,
+    /// Per pixel, where its ray crosses the shell (written by the reference frame); then
+    /// per tile of pixels, the texels those crossings read (`probe_tiles_of_rays`).
+    pub probes: wgpu::Buffer,
+    /// `probes` as the passes read it: pixel (x, y)'s two vec4 are texels (2x, y), (2x+1, y).
+    pub probe_map: MapTexture,
+    /// Nearest, clamped: the maps' textureGather (see `shaders/shared/common.wgsl`).
+    pub map_sampler: wgpu::Sampler,
+    /// Each frame of a submission's image and indentation, in slices of `slot_bytes`.
+    pub image: wgpu::Buffer,
+    pub indentation: wgpu::Buffer,
+    /// Each frame's counters and touched list, in slices of `counter_bytes`.
+    pub counters: wgpu::Buffer,
+    /// Per frame, the indirect dispatches' arguments, copied from `counters`
+    /// ([`super::layout::dispatch_args_at`]).
+    pub dispatch_args: wgpu::Buffer,
+    /// Each contact's own penetration over its pressed rect's rows, copied out of `height`
+    /// right after its contact pass (its labels come from it: see `contact.wgsl`).
+    pub penetration_fields: wgpu::Buffer,
+    /// The empty finger's image, from which a frame copies the rect it can change.
+    pub reference_texture: wgpu::Texture,
+    /// Kept for reading a submission back (its images, indentation rows and counters).
+    pub staging: wgpu::Buffer,
+    /// What a frame without a loaded mesh binds as its SDF grid.
+    pub empty_grid: wgpu::Buffer,
+    /// Baked SDF grids of loaded meshes, by object (the Arc keeps the address unique).
+    grids: HashMap<usize, (Arc<Object>, wgpu::Buffer)>,
+    /// Bytes of one frame's slice of `image` and `indentation`: the whole image with rows
+    /// [`image_pitch`] apart (a contact frame's rect takes less).
+    pub slot_bytes: u64,
+    /// Bytes of one frame's slice of `counters`: the counters, the touched list and the
+    /// tile list.
+    pub counter_bytes: u64,
+}
+
+/// The heightfield's three buffers, which the stages write, and their maps, which the
+/// samplers read (see `shaders/shared/common.wgsl` for why both).
+pub(super) struct Heightfield {
+    buffers: [wgpu::Buffer; 3],
+    maps: [MapTexture; 3],
+    texels: u32,
+}
+
+/// A texture copy of a buffer the shaders sample, and the bytes per texel of both.
+pub(super) struct MapTexture {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+    pub texel_bytes: u32,
+}
+
+/// The heightfield's buffers and maps, in the order of their bindings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Map {
+    Penetration = 0,
+    Elastomer = 1,
+    Height = 2,
+}
+
+impl Map {
+    pub const ALL: [Map; 3] = [Map::Penetration, Map::Elastomer, Map::Height];
+}
+
+/// Bytes a frame's image (or indentation) buffer takes to hold rect `r` of the image: its
+/// rows, [`image_pitch`] pixels apart.
+pub(super) fn held_bytes(r: Rect) -> u64 {
+    r.h as u64 * image_pitch(r.w) as u64 * 4
+}
+
+/// Where a copy to or from `texture` starts for `rect`: its corner (the copy's extent is the
+/// rect's size).
+pub(super) fn rect_of(texture: &wgpu::Texture, rect: Rect) -> wgpu::TexelCopyTextureInfo<'_> {
+    wgpu::TexelCopyTextureInfo {
+        texture,
+        mip_level: 0,
+        origin: wgpu::Origin3d {
+            x: rect.x,
+            y: rect.y,
+            z: 0,
+        },
+        aspect: wgpu::TextureAspect::All,
+    }
+}
+
+/// The size of `rect` as a copy's extent.
+pub(super) fn extent(rect: Rect) -> wgpu::Extent3d {
+    wgpu::Extent3d {
+        width: rect.w,
+        height: rect.h,
+        depth_or_array_layers: 1,
+    }
+}
+
+pub(super) fn storage(
+    ctx: &GpuContext,
+    label: &str,
+    size: u64,
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC
+            | extra,
+        mapped_at_creation: false,
+    })
+}
+
+fn map_texture(
+    ctx: &GpuContext,
+    label: &str,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+) -> MapTexture {
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&Default::default());
+    MapTexture {
+        texture,
+        view,
+        texel_bytes: format.block_copy_size(None).unwrap_or(4),
+    }
+}
+
+/// Bytes of the probes buffer: the pixels' probes, then the tiles' texel ranges.
+fn probes_bytes(sensor: &Sensor) -> u64 {
+    let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
+    let pixels = sensor.width as u64 * sensor.height as u64;
+    pixels * PROBES_BYTES_PER_PIXEL + tiles_x as u64 * tiles_y as u64 * PROBE_TILE_BYTES
+}
+
+/// Refuses a device that cannot hold or run the renderer for `sensor`, naming what is short.
+fn check_device(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Result<()> {
+    let downlevel = ctx.adapter.get_downlevel_capabilities();
+    if !downlevel
+        .flags
+        .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+    {
+        return Err(GeltipError::Gpu(format!(
+            "adapter {} cannot dispatch compute work indirectly, which the renderer needs",
+            ctx.adapter_info.name
+        )));
+    }
+    let limits = ctx.device.limits();
+    let allowed = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let slot_bytes = held_bytes(whole_image(sensor));
+    let image_bytes = probes_bytes(sensor).max(slot_bytes * MAX_BATCH as u64);
+    let (w, h) = (sensor.width, sensor.height);
+    if image_bytes > allowed {
+        return Err(GeltipError::input(
+            "image",
+            format!("{w}x{h} needs {image_bytes} byte GPU buffers; this device allows {allowed}"),
+        ));
+    }
+    let side = limits.max_texture_dimension_2d;
+    if 2 * w > side || h > side {
+        return Err(GeltipError::input(
+            "image",
+            format!(
+                "{w}x{h} needs a {}x{h} texture; this device allows {side} per side",
+                2 * w
+            ),
+        ));
+    }
+    let n = grid.texels;
+    if n > side {
+        return Err(GeltipError::config(
+            "render.heightfield_texels",
+            format!("{n} exceeds this device's {side} texels per texture side"),
+        ));
+    }
+    let texel_bytes = n as u64 * n as u64 * 16;
+    if texel_bytes > allowed {
+        return Err(GeltipError::config(
+            "render.heightfield_texels",
+            format!(
+                "{n} texels per side need {texel_bytes} byte GPU buffers; this device allows {allowed}"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Every pixel of `sensor`'s image, as a rect.
+pub(super) fn whole_image(sensor: &Sensor) -> Rect {
+    Rect {
+        x: 0,
+        y: 0,
+        w: sensor.width,
+        h: sensor.height,
+    }
+}
+
+impl Resources {
+    /// Everything the renderer of `sensor` binds, once [`check_device`] passes.
+    // Over 80 lines: one struct literal, every resource in one place.
+    pub fn new(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Result<Resources> {
+        check_device(ctx, sensor, grid)?;
+        let texels = grid.texels as u64 * grid.texels as u64;
+        let slot_bytes = held_bytes(whole_image(sensor));
+        let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
+        let tiles = tiles_x as u64 * tiles_y as u64;
+        let pixels = sensor.width as u64 * sensor.height as u64;
+        // The counters, the touched list (a pixel each) and the tile list (a tile each).
+        let counter_bytes = (COUNTER_HEADER_BYTES + pixels * 4 + tiles * 4).next_multiple_of(256);
+        let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
+            let layout = ctx
+                .device
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("geltip renderer"),
+                    entries: &layout_entries(),
+                });
+            let pipeline_layout =
+                ctx.device
+                    .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("geltip renderer"),
+                        bind_group_layouts: &[Some(&layout)],
+                        immediate_size: 0,
+                    });
+            (layout, pipeline_layout)
+        })?;
+        let none = wgpu::BufferUsages::empty();
+        let batch = MAX_BATCH as u64;
+        Ok(Resources {
+            layout,
+            pipeline_layout,
+            sensor: ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("geltip sensor"),
+                    contents: bytemuck::bytes_of(&SensorUniform::new(sensor, grid)),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                }),
+            heightfield: Heightfield::new(ctx, grid.texels),
+            probes: storage(ctx, "geltip ray probes", probes_bytes(sensor), none),
+            probe_map: map_texture(
+                ctx,
+                "geltip ray probes map",
+                (2 * sensor.width, sensor.height),
+                wgpu::TextureFormat::Rgba32Float,
+            ),
+            map_sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("geltip map sampler"),
+                ..Default::default()
+            }),
+            image: storage(ctx, "geltip image", slot_bytes * batch, none),
+            indentation: storage(ctx, "geltip indentation", slot_bytes * batch, none),
+            counters: storage(
+                ctx,
+                "geltip counters and touched pixels",
+                counter_bytes * batch,
+                none,
+            ),
+            dispatch_args: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip touched dispatch"),
+                size: DISPATCH_ARGS_BYTES * batch,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            penetration_fields: storage(
+                ctx,
+                "geltip contact penetration fields",
+                texels * 4 * batch,
+                none,
+            ),
+            reference_texture: ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("geltip reference texture"),
+                size: extent(whole_image(sensor)),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Uint,
+                usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            }),
+            staging: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip batch readback"),
+                size: (2 * slot_bytes + COUNTER_HEADER_BYTES + texels * 4) * batch,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            empty_grid: storage(ctx, "geltip empty grid", 16, none),
+            grids: HashMap::new(),
+            slot_bytes,
+            counter_bytes,
+        })
+    }
+
+    /// The reference's pixels over `r` into `image` from byte `offset`, rows
+    /// [`image_pitch`] apart: a frame's buffers' layout for that rect.
+    pub fn copy_reference(&self, encoder: &mut wgpu::CommandEncoder, offset: u64, r: Rect) {
+        encoder.copy_texture_to_buffer(
+            rect_of(&self.reference_texture, r),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.image,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset,
+                    bytes_per_row: Some(image_pitch(r.w) * 4),
+                    rows_per_image: None,
+                },
+            },
+            extent(r),
+        );
+    }
+
+    /// Makes `penetration_fields` hold at least `bytes` (a scene may have many contacts).
+    pub fn reserve_fields(&mut self, ctx: &GpuContext, bytes: u64) {
+        if self.penetration_fields.size() < bytes {
+            self.penetration_fields = storage(
+                ctx,
+                "geltip contact penetration fields",
+                bytes,
+                wgpu::BufferUsages::empty(),
+            );
+        }
+    }
+
+    /// Uploads a mesh's baked SDF grid, once per mesh (nothing for a built-in solid).
+    pub fn upload_grid(&mut self, ctx: &GpuContext, object: &Arc<Object>) {
+        if let Object::Mesh { grid, .. } = object.as_ref() {
+            let key = Arc::as_ptr(object) as usize;
+            if !self.grids.contains_key(&key) {
+                // A bound on the cache: a long run may load many meshes.
+                if self.grids.len() >= MAX_CACHED_GRIDS {
+                    self.grids.clear();
+                }
+                let buffer = ctx
+                    .device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("geltip sdf grid"),
+                        contents: bytemuck::cast_slice(&grid.values),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    });
+                self.grids.insert(key, (object.clone(), buffer));
+            }
+        }
+    }
+
+    /// The SDF grid a contact pass binds for `object`: a loaded mesh's (uploaded by
+    /// [`Self::upload_grid`]), else the empty one.
+    pub fn grid_of(&self, object: &Object) -> &wgpu::Buffer {
+        let key = object as *const Object as usize;
+        match (object, self.grids.get(&key)) {
+            (Object::Mesh { .. }, Some((_, buffer))) => buffer,
+            _ => &self.empty_grid,
+        }
+    }
+}
+
+impl Heightfield {
+    fn new(ctx: &GpuContext, texels: u32) -> Heightfield {
+        let n = texels as u64 * texels as u64;
+        let none = wgpu::BufferUsages::empty();
+        let map = |label, format| map_texture(ctx, label, (texels, texels), format);
+        Heightfield {
+            buffers: [
+                storage(ctx, "geltip penetration", n * 4, none),
+                storage(ctx, "geltip elastomer scratch", n * 16, none),
+                storage(ctx, "geltip height", n * 4, none),
+            ],
+            maps: [
+                map("geltip penetration map", wgpu::TextureFormat::R32Float),
+                map("geltip elastomer map", wgpu::TextureFormat::Rgba32Float),
+                map("geltip height map", wgpu::TextureFormat::R32Float),
+            ],
+            texels,
+        }
+    }
+
+    pub fn buffer(&self, map: Map) -> &wgpu::Buffer {
+        &self.buffers[map as usize]
+    }
+
+    pub fn map(&self, map: Map) -> &MapTexture {
+        &self.maps[map as usize]
+    }
+
+    /// Every texel of the grid, as a rect.
+    pub fn whole(&self) -> Rect {
+        Rect {
+            x: 0,
+            y: 0,
+            w: self.texels,
+            h: self.texels,
+        }
+    }
+
+    /// Zeroes the buffers' rows `rect` spans (all of them without a rect).
+    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder, rect: Option<Rect>) {
+        let row = self.texels as u64;
+        for map in Map::ALL {
+            let bytes = self.map(map).texel_bytes as u64;
+            match rect {
+                Some(r) => encoder.clear_buffer(
+                    self.buffer(map),
+                    r.y as u64 * row * bytes,
+                    Some(r.h as u64 * row * bytes),
+                ),
+                None => encoder.clear_buffer(self.buffer(map), 0, None),
+            }
+        }
+    }
+
+    /// Copies `rect` of the buffer behind `map` into the map (all of it without a rect).
+    pub fn refresh(&self, encoder: &mut wgpu::CommandEncoder, map: Map, rect: Option<Rect>) {
+        let n = self.texels;
+        let r = rect.unwrap_or(self.whole());
+        let target = self.map(map);
+        let bytes = target.texel_bytes;
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: self.buffer(map),
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: (r.y as u64 * n as u64 + r.x as u64) * bytes as u64,
+                    bytes_per_row: Some(n * bytes),
+                    rows_per_image: None,
+                },
+            },
+            rect_of(&target.texture, r),
+            extent(r),
+        );
+    }
+
+    /// Copies the contact pass's own penetration (left in the height buffer over the rows of
+    /// `pressed`) to byte `offset` of `fields`, before the parallels pass overwrites it.
+    /// (Outside `pressed` those rows may hold another contact's penetration.)
+    pub fn copy_field(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pressed: Rect,
+        fields: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        let row = self.texels as u64 * 4;
+        encoder.copy_buffer_to_buffer(
+            self.buffer(Map::Height),
+            pressed.y as u64 * row,
+            fields,
+            offset,
+            Some(pressed.h as u64 * row),
+        );
+    }
+}

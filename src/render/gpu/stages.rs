@@ -1,0 +1,236 @@
+//! Each stage records its own passes, and refreshes the maps of what it wrote (the samplers
+//! of the stages after it read those: see `shaders/shared/common.wgsl`). The order of the
+//! stages in a frame is [`super::frame`]'s.
+
+use super::layout::{
+    dispatch_args_at, groups, DEEP_DISPATCH, DISPATCH_ARGS_BYTES, LIST_WORKGROUP,
+    PROBES_BYTES_PER_PIXEL, SELECT_DISPATCH, SELECT_TILES_WORKGROUP, SHALLOW_DISPATCH,
+    TOUCHED_ARGS_BYTES, WORKGROUP,
+};
+use super::pipelines::{
+    CameraPipelines, ContactPipelines, ElastomerPipelines, LedsPipelines, TouchedPipelines,
+};
+use super::record::{Groups, Recorder};
+use super::resources::{Map, Resources};
+use crate::error::Result;
+use crate::render::touched::{tile_grid, tiles_over};
+use crate::render::Rect;
+
+/// Texel or pixel rects, each with the bind group whose frame uniform holds it as the rect
+/// its pass runs over.
+pub(super) type Pieces<'a> = [(Rect, &'a wgpu::BindGroup)];
+
+/// A contact of a frame as its contact pass needs it.
+pub(super) struct ContactPass<'a> {
+    pub bind: &'a wgpu::BindGroup,
+    pub kind: u32,
+    pub pressed: Rect,
+    /// Where its own penetration goes in the penetration fields.
+    pub field_offset: u64,
+}
+
+impl ContactPipelines {
+    /// Stage 1: each contact's pass over its pressed rect, with its object's pipeline, its
+    /// own penetration copied out before the next pass; then the penetration map over
+    /// `region`. Each pass keeps the deepest press of a texel, so the frame's contacts press
+    /// the skin together.
+    pub fn record<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        res: &Resources,
+        contacts: &[ContactPass<'a>],
+        region: Rect,
+    ) -> Result<()> {
+        for c in contacts {
+            rec.dispatch(self.of(c.kind)?, c.bind, Groups::over(c.pressed));
+            let fields = &res.penetration_fields;
+            res.heightfield
+                .copy_field(rec.encoder(), c.pressed, fields, c.field_offset);
+        }
+        res.heightfield
+            .refresh(rec.encoder(), Map::Penetration, Some(region));
+        Ok(())
+    }
+}
+
+impl ElastomerPipelines {
+    /// Stage 2's blends: along meridians over `meridians`, then along parallels over
+    /// `texels`, each pass followed by its map's refresh over `region`.
+    pub fn record_meridians<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        res: &Resources,
+        meridians: &Pieces<'a>,
+        region: Rect,
+    ) {
+        for &(r, bind) in meridians {
+            rec.dispatch(&self.meridians, bind, Groups::over(r));
+        }
+        res.heightfield
+            .refresh(rec.encoder(), Map::Elastomer, Some(region));
+    }
+
+    pub fn record_parallels<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        res: &Resources,
+        texels: &Pieces<'a>,
+        region: Rect,
+    ) {
+        for &(r, bind) in texels {
+            rec.dispatch(&self.parallels, bind, Groups::over(r));
+        }
+        res.heightfield
+            .refresh(rec.encoder(), Map::Height, Some(region));
+    }
+
+    /// The skin's normals over `texels`, into the pending pass: [`Self::refresh_normals`]
+    /// follows once the selection's first pass has joined it (both read the height map
+    /// alone).
+    pub fn record_normals<'a>(&'a self, rec: &mut Recorder<'a>, texels: &Pieces<'a>) {
+        for &(r, bind) in texels {
+            rec.dispatch(&self.skin_normals, bind, Groups::over(r));
+        }
+    }
+
+    pub fn refresh_normals(&self, rec: &mut Recorder, res: &Resources, region: Rect) {
+        res.heightfield
+            .refresh(rec.encoder(), Map::Elastomer, Some(region));
+    }
+}
+
+impl TouchedPipelines {
+    /// Once, after the reference frame's camera pass: the rays' probes into their map, and
+    /// per tile of pixels the texels those probes read.
+    pub fn record_probe_tiles<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        res: &Resources,
+        bind: &'a wgpu::BindGroup,
+        (width, height): (u32, u32),
+    ) {
+        copy_probes_to_map(rec.encoder(), res, (width, height));
+        let (tx, ty) = tile_grid(width, height);
+        let g = Groups::Direct(groups(tx * ty, LIST_WORKGROUP), 1);
+        rec.dispatch(&self.probe_tiles, bind, g);
+    }
+
+    /// The tile list of the frame in `slot`: the tiles of `pixels` whose probes see a
+    /// displaced texel, into the pending pass (`bind`'s frame uniform holds `pixels` as its
+    /// pixel rect).
+    pub fn record_tiles<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        pixels: Rect,
+        bind: &'a wgpu::BindGroup,
+    ) {
+        let (columns, rows) = tiles_over(pixels);
+        let tiles = columns.len() as u32 * rows.len() as u32;
+        let g = Groups::Direct(groups(tiles, SELECT_TILES_WORKGROUP), 1);
+        rec.dispatch(&self.select_tiles, bind, g);
+    }
+
+    /// The touched list of the frame in `slot`, from the listed tiles: a pass sized by the
+    /// tile list.
+    pub fn record_listed<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        res: &Resources,
+        slot: u64,
+        bind: &'a wgpu::BindGroup,
+    ) {
+        let args = slot * DISPATCH_ARGS_BYTES + dispatch_args_at(SELECT_DISPATCH);
+        rec.encoder().copy_buffer_to_buffer(
+            &res.counters,
+            slot * res.counter_bytes + SELECT_DISPATCH as u64 * 4,
+            &res.dispatch_args,
+            args,
+            Some(12),
+        );
+        rec.dispatch(&self.select_listed, bind, Groups::Indirect(args));
+    }
+}
+
+impl CameraPipelines {
+    /// The reference frame: every pixel of `bind`'s pixel rect cast and shaded.
+    pub fn record_reference<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        bind: &'a wgpu::BindGroup,
+        pixels: Rect,
+    ) {
+        rec.dispatch(&self.reference, bind, Groups::over(pixels));
+    }
+
+    /// Stage 3 of a contact frame: the passes over the touched list of the frame in `slot`,
+    /// the shallow pixels' and the deep ones', sized by it.
+    pub fn record_touched<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        res: &Resources,
+        slot: u64,
+        bind: &'a wgpu::BindGroup,
+    ) {
+        let args = slot * DISPATCH_ARGS_BYTES;
+        rec.encoder().copy_buffer_to_buffer(
+            &res.counters,
+            slot * res.counter_bytes + SHALLOW_DISPATCH as u64 * 4,
+            &res.dispatch_args,
+            args + dispatch_args_at(SHALLOW_DISPATCH),
+            Some(TOUCHED_ARGS_BYTES),
+        );
+        let (shallow, deep) = (
+            args + dispatch_args_at(SHALLOW_DISPATCH),
+            args + dispatch_args_at(DEEP_DISPATCH),
+        );
+        rec.dispatch(&self.shallow, bind, Groups::Indirect(shallow));
+        rec.dispatch(&self.deep, bind, Groups::Indirect(deep));
+    }
+}
+
+impl LedsPipelines {
+    /// Stage 4: the sensor's noise over every pixel of a finished `width` x `height` frame.
+    pub fn record_noise<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        bind: &'a wgpu::BindGroup,
+        (width, height): (u32, u32),
+    ) {
+        let g = Groups::Direct(groups(width, WORKGROUP), groups(height, WORKGROUP));
+        rec.dispatch(&self.add_noise, bind, g);
+    }
+}
+
+/// Copies the rays' probes into their map: in one copy when a row of them is a whole
+/// number of 256-byte copy rows, else row by row (once per renderer).
+fn copy_probes_to_map(encoder: &mut wgpu::CommandEncoder, res: &Resources, (w, h): (u32, u32)) {
+    let row_bytes = w * PROBES_BYTES_PER_PIXEL as u32;
+    let (rows_per_copy, copies) = if row_bytes.is_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) {
+        (h, 1)
+    } else {
+        (1, h)
+    };
+    for k in 0..copies {
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &res.probes,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: k as u64 * row_bytes as u64,
+                    bytes_per_row: Some(row_bytes).filter(|_| rows_per_copy > 1),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::TexelCopyTextureInfo {
+                texture: &res.probe_map.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: k, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width: 2 * w,
+                height: rows_per_copy,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+}

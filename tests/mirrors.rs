@@ -1,0 +1,356 @@
+//! The GPU renderer against the CPU mirrors of its stages: its lens rays against the CPU
+//! projection map, its frames against the CPU pipeline's, and the footprints and tile lists
+//! that bound a frame's work against every texel and pixel the CPU mirrors move.
+
+mod common;
+mod support;
+
+use geltip::object::{Object, Solid};
+use geltip::render::gpu::Renderer;
+use geltip::render::{self, cpu, elastomer, touched, Contact, Place};
+use geltip::sensor::Sensor;
+use glam::DVec2;
+use std::sync::Arc;
+use support::{close_enough, contact, diff, rgb, small_sensor};
+
+#[test]
+fn gpu_lens_rays_agree_with_the_cpu_map() {
+    for sensor in common::all_sensors() {
+        let mut r = Renderer::new(&sensor).unwrap();
+        let mut pixels = Vec::new();
+        for v in (0..sensor.height).step_by(7) {
+            for u in (0..sensor.width).step_by(7) {
+                pixels.push(DVec2::new(u as f64 + 0.25, v as f64 + 0.5));
+            }
+        }
+        // The centre, the junction ring and the lens edge on purpose.
+        let rho_j = sensor.lens.project(sensor.finger.junction_theta());
+        let rho_e = sensor.lens.max_rho();
+        for rho in [0.0, rho_j - 1e-3, rho_j + 1e-3, rho_e * (1.0 - 1e-5)] {
+            let px = sensor.principal + DVec2::new(rho, 0.0);
+            if sensor.in_image(px) {
+                pixels.push(px);
+            }
+        }
+        let gpu = r.unproject_pixels(&pixels).unwrap();
+        let (mut worst, mut compared) = (0.0f64, 0);
+        for (px, g) in pixels.iter().zip(&gpu) {
+            let c = sensor.unproject(*px);
+            match (c, g) {
+                (Some(c), Some(g)) => {
+                    worst = worst.max((c.point - *g).length());
+                    compared += 1;
+                }
+                (None, None) => {}
+                // Pixels within a hair of the lens edge may fall either side in f32.
+                (c, g) => {
+                    let rho = (*px - sensor.principal).length();
+                    assert!(
+                        (rho / rho_e - 1.0).abs() < 1e-5,
+                        "{}: {px}: cpu {c:?} gpu {g:?}",
+                        sensor.name
+                    );
+                }
+            }
+        }
+        assert!(
+            compared > 500,
+            "{}: only {compared} pixels compared",
+            sensor.name
+        );
+        assert!(
+            worst < 1e-3,
+            "{}: GPU and CPU disagree by {worst} mm",
+            sensor.name
+        );
+    }
+}
+
+#[test]
+fn gpu_matches_the_cpu_pipeline() {
+    gpu_matches_cpu(&small_sensor());
+    // Other ray steps and kernel taps (the shaders take them as pipeline constants).
+    let mut c = small_sensor().config.clone();
+    c.render.ray_steps = 7;
+    c.render.blend_tap_spacing = 0.5;
+    gpu_matches_cpu(&Sensor::from_config("small-fine", c.clone()).unwrap());
+    // Taps a texel apart for both kernels: the wide taps do not lie on every other
+    // narrow one, and the meridians pass samples each kernel's own (WIDE_TAPS_NESTED off).
+    c.render.blend_tap_spacing = 0.25;
+    let apart = Sensor::from_config("small-apart", c).unwrap();
+    let nested = |s: &Sensor| {
+        let grid = render::HeightfieldGrid::for_sensor(s);
+        render::uniforms::SensorUniform::new(s, &grid)
+            .pipeline_constants()
+            .iter()
+            .find(|(name, _)| *name == "WIDE_TAPS_NESTED")
+            .map(|&(_, v)| v)
+    };
+    assert_eq!(nested(&small_sensor()), Some(1.0));
+    assert_eq!(nested(&apart), Some(0.0));
+    gpu_matches_cpu(&apart);
+}
+
+fn gpu_matches_cpu(sensor: &Sensor) {
+    let sensor = sensor.clone();
+    let mut r = Renderer::new(&sensor).unwrap();
+    let reference = cpu::render(&sensor, None).unwrap();
+    let d = diff(&rgb(r.reference()), &rgb(&reference.frame), 3);
+    assert!(close_enough(&d), "reference: {d:?}");
+    for (solid, place) in [
+        (Solid::Sphere, Place::Rotation(0.0)),
+        (Solid::Cone, Place::Rotation(60.0)),
+        (Solid::Slab, Place::Translation(5.0)),
+        (Solid::Edge, Place::Rotation(90.0)),
+    ] {
+        let c = contact(solid, place, 1.0);
+        let (gpu, _) = r.render(&c).unwrap();
+        let cpu = cpu::render(&sensor, Some(&c)).unwrap();
+        // The pixels re-rendered: the GPU's touched list against the CPU mirror's (f32 and
+        // f64 may part on a probe at the very edge of the deformation).
+        let touched =
+            touched::select_touched(&sensor, r.grid(), &cpu.height, cpu.pixel_rect.unwrap());
+        let (gpu_touched, cpu_touched) = (r.timings().touched_pixels as f64, touched.len() as f64);
+        assert!(
+            cpu_touched > 100.0 && (gpu_touched - cpu_touched).abs() <= 0.01 * cpu_touched,
+            "{solid:?}: touched pixels GPU {gpu_touched}, CPU {cpu_touched}"
+        );
+        let d = diff(&rgb(&gpu), &rgb(&cpu.frame), 3);
+        assert!(close_enough(&d), "{solid:?} at {place:?}: {d:?}");
+        // The CPU pipeline over the footprint alone (the reference's pixels elsewhere): as
+        // the full CPU render but for a pixel or two at the footprint's edge whose probes see
+        // no deformation (measured: at most 4e-5 of the channel values, mean 5e-4 levels).
+        let footprint = cpu::render_contact(&sensor, r.grid(), &reference.frame, &c).unwrap();
+        let d = diff(&rgb(&footprint), &rgb(&cpu.frame), 3);
+        assert!(close_enough(&d), "{solid:?}: CPU footprint render {d:?}");
+        let worst = gpu
+            .indentation
+            .iter()
+            .zip(&cpu.frame.indentation)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 0.05, "{solid:?}: indentation differs by {worst} mm");
+        // The CPU pipeline must see a real imprint, or this comparison proves nothing.
+        assert!(
+            cpu.frame.indentation.iter().any(|&d| d > 0.2),
+            "{solid:?}: no imprint"
+        );
+    }
+}
+
+/// The footprint bounds the work of a contact frame, so it must never cut an imprint short:
+/// over the whole heightfield (not just the footprint), every texel the object pushes in
+/// lies inside the pressed rectangle (where the contact stage traces), every texel the object
+/// pushes in or the elastomer then moves inside the texel rectangle, and every pixel
+/// that sees such a texel (at the undeformed surface or at the moved skin) inside the pixel
+/// rectangle. Seven solids at the paper's eight positions, at three azimuths and spins, on
+/// the paper's sensor and on a softer gel whose imprints spread and bulge further.
+#[test]
+fn footprints_hold_every_moved_texel_and_its_pixels() {
+    let mut soft = common::paper_config();
+    soft.elastomer.blend_mm = 1.0;
+    soft.elastomer.bulge = 1.0;
+    soft.elastomer.drape_mm = 3.0;
+    // Every tap on the paper's sensor; on the soft one (its kernels are slow on the CPU) the
+    // taps along the side, whose imprints run to the lens's edge.
+    footprints_hold_moved_texels(&Sensor::preset("paper").unwrap(), 0);
+    footprints_hold_moved_texels(&Sensor::from_config("soft", soft).unwrap(), 4);
+}
+
+/// Checks the taps at the paper's positions from index `first` on; and that the tiles the
+/// renderer selects touched pixels from (`touched::select_tiles`, from their probes' texels)
+/// hold every touched pixel of the pixel rectangle, while most of its tiles are left out.
+fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
+    let sensor = sensor.clone();
+    let grid = render::HeightfieldGrid::for_sensor(&sensor);
+    let tiles = touched::probe_tiles(&sensor, &grid);
+    let mut tally = TileTally::default();
+    let reach = elastomer::Kernel::for_config(&sensor.config, &grid).reach_mm;
+    let mut checked = 0;
+    for (k, solid) in Solid::ALL.into_iter().enumerate() {
+        for (m, (place, _)) in geltip::jobs::experiment::POSITIONS.iter().enumerate() {
+            if m < first {
+                continue;
+            }
+            let c = Contact {
+                object: Arc::new(Object::Solid(solid)),
+                place: *place,
+                azimuth_deg: [0.0, 77.0, 200.0][(k + m) % 3],
+                spin_deg: [0.0, 35.0, 110.0][(k + 2 * m) % 3],
+                depth_mm: [1.0, 1.5][m % 2],
+            };
+            let what = format!("{}: {solid:?} at {place:?}", sensor.name);
+            let pose = c.pose(&sensor).unwrap();
+            let fp = render::contact::footprint(&sensor, &grid, &pose, &c.object, reach)
+                .unwrap_or_else(|| panic!("{what}: no footprint"));
+            let whole = render::Rect {
+                x: 0,
+                y: 0,
+                w: grid.texels,
+                h: grid.texels,
+            };
+            let p = render::contact::penetration_field(&sensor, &grid, &pose, &c.object, whole);
+            let h = assert_blends_within(&what, &sensor, &grid, &p, &fp);
+            assert_moved_within(&what, &sensor, &grid, &p, &h, &fp);
+            tally.add(&what, &sensor, &grid, &h, &tiles, &fp);
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 7 * (8 - first));
+    let TileTally {
+        rect_tiles,
+        listed_tiles,
+        missed_by_middle,
+    } = tally;
+    assert!(
+        missed_by_middle > 0,
+        "{}: tiles by their middle probes alone held every touched pixel",
+        sensor.name
+    );
+    assert!(
+        (listed_tiles as f64) < 0.7 * rect_tiles as f64,
+        "{}: {listed_tiles} of the pixel rectangles' {rect_tiles} tiles listed",
+        sensor.name
+    );
+    eprintln!(
+        "{}: {listed_tiles} of the pixel rectangles' {rect_tiles} tiles listed",
+        sensor.name
+    );
+}
+
+fn within(r: render::Rect, i: u32, j: u32) -> bool {
+    i >= r.x && i < r.x + r.w && j >= r.y && j < r.y + r.h
+}
+
+/// The elastomer's passes over the footprint grown by 30 texels (8 mm) each side, from the
+/// penetration `p`: every blend along a meridian that is not zero lies in the meridian rect
+/// (the meridians pass runs over it alone). Returns the skin's displacement.
+fn assert_blends_within(
+    what: &str,
+    sensor: &Sensor,
+    grid: &render::HeightfieldGrid,
+    p: &[f32],
+    fp: &render::contact::Footprint,
+) -> Vec<f32> {
+    let (n, t) = (grid.texels, fp.texels);
+    let grown = render::Rect {
+        x: t.x.saturating_sub(30),
+        y: t.y.saturating_sub(30),
+        w: (t.x + t.w + 30).min(n) - t.x.saturating_sub(30),
+        h: (t.y + t.h + 30).min(n) - t.y.saturating_sub(30),
+    };
+    let config = &sensor.config.elastomer;
+    let kernel = elastomer::Kernel::for_config(&sensor.config, grid);
+    let meridian = elastomer::blend_meridian(grid, config, kernel, p, grown);
+    let mut blended = 0;
+    for j in 0..n {
+        for i in 0..n {
+            let v = meridian[(j * n + i) as usize];
+            if v != DVec2::ZERO {
+                blended += 1;
+                assert!(
+                    within(fp.meridians, i, j),
+                    "{what}: texel ({i}, {j}) blends {v} outside {:?}",
+                    fp.meridians
+                );
+            }
+        }
+    }
+    assert!(blended > 20, "{what}: only {blended} texels blend");
+    let finger = &sensor.finger;
+    elastomer::blend_azimuth(finger, grid, config, kernel, p, &meridian, grown).0
+}
+
+/// Every texel the object pushes in (`p`) lies in the pressed rect, every texel it pushes
+/// in or the elastomer moves (`h`) in the texel rect, and every pixel that sees such a
+/// texel (at the undeformed surface or at the moved skin) in the pixel rect.
+fn assert_moved_within(
+    what: &str,
+    sensor: &Sensor,
+    grid: &render::HeightfieldGrid,
+    p: &[f32],
+    h: &[f32],
+    fp: &render::contact::Footprint,
+) {
+    let (n, t, pressed, px) = (grid.texels, fp.texels, fp.pressed, fp.pixels.unwrap());
+    let mut moved = 0;
+    for j in 0..n {
+        for i in 0..n {
+            let idx = (j * n + i) as usize;
+            if p[idx] == 0.0 && h[idx] == 0.0 {
+                continue;
+            }
+            moved += 1;
+            assert!(
+                p[idx] == 0.0 || within(pressed, i, j),
+                "{what}: texel ({i}, {j}) is pressed ({}) outside {pressed:?}",
+                p[idx]
+            );
+            assert!(
+                within(t, i, j),
+                "{what}: texel ({i}, {j}) moves (p {}, h {}) outside {t:?}",
+                p[idx],
+                h[idx]
+            );
+            let coord = geltip::finger::SurfaceCoord::from_disc(grid.texel_centre(i, j));
+            let sp = sensor.finger.point_at(coord);
+            for depth in [0.0, h[idx] as f64] {
+                if let Ok(q) = sensor.project(sp.point - depth * sp.normal) {
+                    assert!(
+                        q.x >= px.x as f64 - 0.5
+                            && q.x <= (px.x + px.w) as f64 - 0.5
+                            && q.y >= px.y as f64 - 0.5
+                            && q.y <= (px.y + px.h) as f64 - 0.5,
+                        "{what}: texel ({i}, {j}) is seen at {q} outside {px:?}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(moved > 20, "{what}: only {moved} texels move");
+}
+
+/// Tiles over the taps: those of the pixel rects, those listed, and the touched pixels
+/// whose tiles a cull by the tiles' middle probes alone leaves out (a cull that must miss
+/// some, or the check could not tell a good cull from a bad one).
+#[derive(Default)]
+struct TileTally {
+    rect_tiles: usize,
+    listed_tiles: usize,
+    missed_by_middle: usize,
+}
+
+impl TileTally {
+    /// Checks that the tiles listed for the skin `h` hold every touched pixel of the
+    /// footprint's pixel rect, and counts them.
+    fn add(
+        &mut self,
+        what: &str,
+        sensor: &Sensor,
+        grid: &render::HeightfieldGrid,
+        h: &[f32],
+        tiles: &[[touched::TexelRange; 3]],
+        fp: &render::contact::Footprint,
+    ) {
+        let (t, px) = (fp.texels, fp.pixels.unwrap());
+        let empty = [1, 1, 0, 0];
+        let middle_only: Vec<_> = tiles.iter().map(|r| [empty, r[1], empty]).collect();
+        let (across, _) = touched::tile_grid(sensor.width, sensor.height);
+        let listed = touched::select_tiles(sensor, grid, h, tiles, px, t);
+        let by_middle = touched::select_tiles(sensor, grid, h, &middle_only, px, t);
+        let touched_pixels = touched::select_touched(sensor, grid, h, px);
+        assert!(!touched_pixels.is_empty(), "{what}: no pixel touched");
+        for &i in &touched_pixels {
+            let (x, y) = (i % sensor.width, i / sensor.width);
+            let tile = (y / touched::PIXEL_TILE) * across + x / touched::PIXEL_TILE;
+            assert!(
+                listed.contains(&tile),
+                "{what}: touched pixel ({x}, {y}) lies in tile {tile}, not listed"
+            );
+            self.missed_by_middle += !by_middle.contains(&tile) as usize;
+        }
+        let (columns, rows) = touched::tiles_over(px);
+        self.rect_tiles += columns.len() * rows.len();
+        self.listed_tiles += listed.len();
+    }
+}
