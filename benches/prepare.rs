@@ -5,18 +5,17 @@
 
 use geltip::jobs::{dataset, experiment};
 use geltip::object::{Object, Solid};
-use geltip::render::{contact, elastomer, Contact, HeightfieldGrid, Press};
+use geltip::render::{contact, elastomer, HeightfieldGrid, Press};
 use geltip::sensor::Sensor;
 use std::sync::Arc;
 use std::time::Instant;
 
 /// Mean pose and footprint milliseconds over `list`.
-fn time(sensor: &Sensor, list: &[Contact]) -> anyhow::Result<(f64, f64)> {
+fn time(sensor: &Sensor, list: &[Press]) -> anyhow::Result<(f64, f64)> {
     let grid = HeightfieldGrid::for_sensor(sensor);
     let kernel = elastomer::Kernel::for_config(&sensor.config, &grid);
     let (mut pose_s, mut footprint_s) = (0.0, 0.0);
-    for c in list {
-        let press = Press::from(c);
+    for press in list {
         let t0 = Instant::now();
         let pose = press.pose(sensor)?;
         let t1 = Instant::now();

@@ -25,13 +25,13 @@ use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::{Object, Solid};
 use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
-use geltip::render::{contact, cpu, elastomer, Contact, HeightfieldGrid, Press};
+use geltip::render::{contact, cpu, elastomer, HeightfieldGrid, Hold, Press};
 use geltip::sensor::Sensor;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// `n` contacts: the paper's 56 taps (seven solids at its eight positions), over and over.
-fn contacts(n: usize) -> Vec<Contact> {
+fn contacts(n: usize) -> Vec<Press> {
     let all = experiment::all_taps(&Protocol::default());
     all.iter().cycle().take(n).cloned().collect()
 }
@@ -114,14 +114,14 @@ fn each<T, U>(
 }
 
 /// One contact per submission, each of `list` in turn.
-fn one_per_submit(r: &mut Renderer, list: &[Contact]) -> anyhow::Result<Timings> {
+fn one_per_submit(r: &mut Renderer, list: &[Press]) -> anyhow::Result<Timings> {
     each(r, list, |r, c| r.render(c))
 }
 
 /// `--host-phases N`: N passes of one contact per submit, each after timing the host's
 /// speed, as a table of fps by host speed (the fixed loop on all cores, ms): how much of a
 /// run's spread is the host's, and the rate at the host's full speed (its fastest bins).
-fn host_phases(r: &mut Renderer, list: &[Contact], n: usize) -> anyhow::Result<()> {
+fn host_phases(r: &mut Renderer, list: &[Press], n: usize) -> anyhow::Result<()> {
     let mut all = passes(n, list.len(), || one_per_submit(r, list))?;
     all.sort_by(|a, b| a.host.all_cores_ms.total_cmp(&b.host.all_cores_ms));
     println!(
@@ -284,7 +284,7 @@ fn print_table_header() {
 fn gpu_rows(
     r: &mut Renderer,
     solids: &[Arc<Object>],
-    list: &[Contact],
+    list: &[Press],
     repeat: usize,
 ) -> anyhow::Result<Vec<Pass>> {
     let frames = list.len();
@@ -320,13 +320,15 @@ fn gpu_rows(
     // Several objects in one frame (Renderer::render_scene): each tap with its twin on the
     // opposite side of the finger (azimuth + 180: imprints that do not overlap), against the
     // same taps one per scene.
-    let ones: Vec<Press> = list.iter().map(Press::from).collect();
+    let ones: Vec<Press> = list.to_vec();
     let twins: Vec<[Press; 2]> = list
         .iter()
         .map(|c| {
             let mut twin = c.clone();
-            twin.azimuth_deg += 180.0;
-            [Press::from(c), Press::from(&twin)]
+            if let Hold::Surface { azimuth_deg, .. } = &mut twin.hold {
+                *azimuth_deg += 180.0;
+            }
+            [c.clone(), twin]
         })
         .collect();
     let mut one_scene = passes(repeat, frames, || {
@@ -343,7 +345,7 @@ fn gpu_rows(
 /// What a user could run instead on the same cores: the CPU mirrors over the same
 /// footprint (the GPU's reference frame as the empty finger), rayon over the touched
 /// pixels. Fewer frames: it is the slow row. Its split is not measured (all "render").
-fn cpu_row(r: &Renderer, list: &[Contact], repeat: usize) -> anyhow::Result<()> {
+fn cpu_row(r: &Renderer, list: &[Press], repeat: usize) -> anyhow::Result<()> {
     let cpu_list = &list[..(list.len() / 4).max(8).min(list.len())];
     let reference_frame = r.reference().clone();
     let (sensor, grid) = (r.sensor().clone(), *r.grid());
@@ -368,7 +370,7 @@ fn cpu_row(r: &Renderer, list: &[Contact], repeat: usize) -> anyhow::Result<()> 
 /// random dataset contacts: from timestamps between the stages of one submission where
 /// the device writes them (lavapipe does), else each stage submitted and waited for on
 /// its own (then a stage's time includes a submission and a wait).
-fn stage_table(r: &mut Renderer, list: &[Contact]) -> anyhow::Result<()> {
+fn stage_table(r: &mut Renderer, list: &[Press]) -> anyhow::Result<()> {
     println!();
     let how = if geltip::gpu::GpuContext::shared()?.has_timestamps() {
         "ms, timestamps"
@@ -382,7 +384,7 @@ fn stage_table(r: &mut Renderer, list: &[Contact]) -> anyhow::Result<()> {
     println!("|{:-<30}|{:->16}|{:->24}|", "", "", "");
     // Every seventh of the paper's taps (each solid and each position once), and 100 of
     // `geltip dataset`'s random contacts (seed 1, the seven solids, default depths).
-    let taps: Vec<Contact> = list.iter().step_by(7).take(8).cloned().collect();
+    let taps: Vec<Press> = list.iter().step_by(7).take(8).cloned().collect();
     let objects: Vec<_> = Solid::ALL
         .iter()
         .map(|s| Arc::new(Object::Solid(*s)))
@@ -415,11 +417,10 @@ fn stage_table(r: &mut Renderer, list: &[Contact]) -> anyhow::Result<()> {
 /// The texels the elastomer's passes run over a frame, on average over `list`: the texel
 /// rects (the parallels pass and the skin normals) and the meridian rects (the meridians
 /// pass: the pressed rect grown by the kernels' reach).
-fn texel_rects(sensor: &Sensor, grid: &HeightfieldGrid, list: &[Contact]) -> anyhow::Result<()> {
+fn texel_rects(sensor: &Sensor, grid: &HeightfieldGrid, list: &[Press]) -> anyhow::Result<()> {
     let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
     let (mut texels, mut meridians) = (0, 0);
-    for c in list {
-        let press = Press::from(c);
+    for press in list {
         let pose = press.pose(sensor)?;
         if let Some(f) = contact::footprint(sensor, grid, &pose, &press.object, reach) {
             texels += f.texels.area();

@@ -10,13 +10,13 @@
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::Solid;
 use geltip::render::gpu::Renderer;
-use geltip::render::{Contact, Frame};
+use geltip::render::{Frame, Press};
 use geltip::sensor::Sensor;
 use plotters::prelude::*;
 use std::time::Instant;
 
 /// One contact per tap position of the paper, each with another of the seven solids.
-fn contacts() -> Vec<Contact> {
+fn contacts() -> Vec<Press> {
     (0..experiment::POSITIONS.len())
         .map(|i| {
             experiment::taps(Solid::ALL[i % Solid::ALL.len()], &Protocol::default())[i].clone()

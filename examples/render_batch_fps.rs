@@ -14,7 +14,7 @@
 
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::render::gpu::{Renderer, MAX_BATCH};
-use geltip::render::Contact;
+use geltip::render::Press;
 use geltip::sensor::Sensor;
 use std::io::{BufRead, Write};
 use std::time::Instant;
@@ -31,7 +31,7 @@ fn main() -> anyhow::Result<()> {
     let sensor = Sensor::preset("paper")?;
     let mut renderer = Renderer::new(&sensor)?;
     let taps = experiment::all_taps(&Protocol::default());
-    let list: Vec<Contact> = taps.iter().cycle().take(frames.max(1)).cloned().collect();
+    let list: Vec<Press> = taps.iter().cycle().take(frames.max(1)).cloned().collect();
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", geltip::gpu::host_description(renderer.adapter()))?;
     out.flush()?;

@@ -8,7 +8,7 @@
 use geltip::object::{Object, Solid};
 use geltip::output;
 use geltip::render::gpu::Renderer;
-use geltip::render::{Contact, Place};
+use geltip::render::{Place, Press};
 use geltip::sensor::Sensor;
 use std::path::Path;
 use std::sync::Arc;
@@ -16,13 +16,12 @@ use std::sync::Arc;
 fn main() -> anyhow::Result<()> {
     let sensor = Sensor::preset("paper")?;
     let mut renderer = Renderer::new(&sensor)?;
-    let contact = Contact {
-        object: Arc::new(Object::Solid(Solid::Cone)),
-        place: Place::Translation(5.0),
-        azimuth_deg: 200.0,
-        spin_deg: 0.0,
-        depth_mm: 1.0,
-    };
+    let contact = Press::at(
+        Arc::new(Object::Solid(Solid::Cone)),
+        Place::Translation(5.0),
+        200.0,
+        1.0,
+    );
     let (frame, truth) = renderer.render(&contact)?;
     let dir = Path::new("out/examples");
     let (w, h) = (frame.width, frame.height);

@@ -120,7 +120,7 @@ fn first_touch_follows_a_slanted_ridge_to_its_top() {
     let depths = dataset::default_depth_range(sensor.finger.shell_thickness);
     for k in 0..100 {
         let contact = dataset::sample_contact(&sensor, &objects, depths, 2, k).unwrap();
-        let pose = Press::from(&contact).pose(&sensor).unwrap();
+        let pose = contact.pose(&sensor).unwrap();
         let touching = pose.origin + pose.depth_mm * pose.normal;
         // The ridge: along x at the object's top (z = 0), 2001 points.
         let half = 0.5 * dims::EDGE_LENGTH;
@@ -224,13 +224,7 @@ fn torus_marks_its_ring_not_its_hole() {
         assert!(frame.indentation[index(hole)] < 0.01, "{place:?}");
         assert!(truth.mask_pixels > 100);
         // And the single-contact API gives the same frame.
-        let contact = geltip::render::Contact {
-            object: p.object.clone(),
-            place,
-            azimuth_deg: 20.0,
-            spin_deg: 0.0,
-            depth_mm: 0.6,
-        };
+        let contact = Press::at(p.object.clone(), place, 20.0, 0.6);
         let (single, truth1) = r.render(&contact).unwrap();
         assert!(single.rgba == frame.rgba);
         assert_eq!(truth1.first_touch_offset_mm, truth.first_touch_offset_mm);
@@ -523,19 +517,15 @@ fn labels_from_the_gpu_field_match_the_cpu_field() {
             want.area_mm2
         );
     };
-    let contact = |solid, place, azimuth_deg, depth_mm| geltip::render::Contact {
-        object: Arc::new(Object::Solid(solid)),
-        place,
-        azimuth_deg,
-        spin_deg: 0.0,
-        depth_mm,
+    let contact = |solid, place, azimuth_deg, depth_mm| {
+        Press::at(Arc::new(Object::Solid(solid)), place, azimuth_deg, depth_mm)
     };
     let plain = [
         contact(Solid::Sphere, Place::Rotation(0.0), 0.0, 1.0),
         contact(Solid::Cone, Place::Rotation(60.0), 45.0, 0.8),
         contact(Solid::Slab, Place::Translation(10.0), 200.0, 0.6),
     ];
-    let contacts: Vec<Press> = plain.iter().map(Press::from).collect();
+    let contacts: Vec<Press> = plain.to_vec();
     let batch = r.render_batch(&plain).unwrap();
     for ((_, t), p) in batch.iter().zip(&contacts) {
         check(&format!("batch {}", t.place), t, p);

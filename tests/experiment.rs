@@ -4,19 +4,13 @@ use geltip::jobs::experiment::{self, Protocol, POSITIONS};
 use geltip::localise::{Localiser, Method};
 use geltip::object::{Object, Solid};
 use geltip::render::gpu::Renderer;
-use geltip::render::{Contact, Place};
+use geltip::render::{Place, Press};
 use geltip::sensor::Sensor;
 use geltip::Region;
 use std::sync::Arc;
 
-fn tap(solid: Solid, place: Place, azimuth: f64) -> Contact {
-    Contact {
-        object: Arc::new(Object::Solid(solid)),
-        place,
-        azimuth_deg: azimuth,
-        spin_deg: 0.0,
-        depth_mm: 1.0,
-    }
+fn tap(solid: Solid, place: Place, azimuth: f64) -> Press {
+    Press::at(Arc::new(Object::Solid(solid)), place, azimuth, 1.0)
 }
 
 /// The surface detector finds a single clear contact on the hemisphere, at the junction and

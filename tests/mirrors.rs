@@ -7,7 +7,7 @@ mod support;
 
 use geltip::object::{Object, Solid};
 use geltip::render::gpu::Renderer;
-use geltip::render::{self, cpu, elastomer, touched, Contact, Place};
+use geltip::render::{self, cpu, elastomer, touched, Place, Press};
 use geltip::sensor::Sensor;
 use glam::DVec2;
 use std::sync::Arc;
@@ -172,13 +172,14 @@ fn footprints_hold_moved_texels(sensor: &Sensor, first: usize) {
             if m < first {
                 continue;
             }
-            let c = Contact {
-                object: Arc::new(Object::Solid(solid)),
-                place: *place,
-                azimuth_deg: [0.0, 77.0, 200.0][(k + m) % 3],
-                spin_deg: [0.0, 35.0, 110.0][(k + 2 * m) % 3],
-                depth_mm: [1.0, 1.5][m % 2],
-            };
+            let azimuth = [0.0, 77.0, 200.0][(k + m) % 3];
+            let c = Press::at(
+                Arc::new(Object::Solid(solid)),
+                *place,
+                azimuth,
+                [1.0, 1.5][m % 2],
+            )
+            .spun([0.0, 35.0, 110.0][(k + 2 * m) % 3]);
             let what = format!("{}: {solid:?} at {place:?}", sensor.name);
             let pose = c.pose(&sensor).unwrap();
             let fp = render::contact::footprint(&sensor, &grid, &pose, &c.object, reach)

@@ -11,7 +11,7 @@ mod support;
 use geltip::object::{Object, Solid};
 use geltip::render::gpu::Renderer;
 use geltip::render::{self, elastomer};
-use geltip::render::{Contact, Frame, Place};
+use geltip::render::{Frame, Place, Press};
 use geltip::sensor::Sensor;
 use glam::DVec2;
 use std::path::PathBuf;
@@ -238,7 +238,7 @@ fn same_inputs_give_identical_bytes() {
 
 /// A small contact (a cone 0.3 mm deep) and its frame from a fresh renderer of `sensor`:
 /// what a renderer that rendered other frames first must give for it.
-fn small_contact_alone(sensor: &Sensor) -> (Contact, Frame) {
+fn small_contact_alone(sensor: &Sensor) -> (Press, Frame) {
     let small = contact(Solid::Cone, Place::Rotation(62.0), 0.3);
     let (alone, _) = Renderer::new(sensor).unwrap().render(&small).unwrap();
     (small, alone)
@@ -273,7 +273,7 @@ fn a_refused_scene_leaves_the_next_frame_as_from_a_fresh_renderer() {
     let (small, alone) = small_contact_alone(r.sensor());
     r.render(&contact(Solid::Slab, Place::Rotation(60.0), 1.5))
         .unwrap();
-    let refused = render::Press::from(&contact(Solid::Sphere, Place::Rotation(45.0), -1.0));
+    let refused = contact(Solid::Sphere, Place::Rotation(45.0), -1.0);
     let e = r.render_scene(&[refused]).unwrap_err().to_string();
     assert!(e.starts_with("depth: "), "{e}");
     let (after, _) = r.render(&small).unwrap();
@@ -507,9 +507,9 @@ fn a_loaded_mesh_renders_like_its_analytic_solid() {
         let mesh = Arc::new(Object::from_arg(path.to_str().unwrap()).unwrap());
         let place = Place::Rotation(40.0);
         let analytic = contact(solid, place, 1.0);
-        let loaded = Contact {
+        let loaded = Press {
             object: mesh,
-            ..analytic.clone()
+            hold: analytic.hold,
         };
         let (a, ta) = r.render(&analytic).unwrap();
         let (b, tb) = r.render(&loaded).unwrap();

@@ -10,7 +10,7 @@ use geltip::gpu::context::MAX_STREAMS;
 use geltip::localise::{Localiser, Method};
 use geltip::object::Object;
 use geltip::render::gpu::{Renderer, MAX_BATCH};
-use geltip::render::{Contact, Frame, GroundTruth, Hold, Place, Press};
+use geltip::render::{Frame, GroundTruth, Hold, Place, Press};
 use geltip::GeltipError;
 use glam::{DVec2, DVec3};
 use numpy::{
@@ -815,12 +815,12 @@ impl<T> OutPtr<T> {
 /// writing frame i into slot i of `images` (RGB) and `depths`; the labels in list order.
 fn render_chunks(
     renderers: Vec<&mut Renderer>,
-    list: &[Contact],
+    list: &[Press],
     images: &mut [u8],
     depths: Option<&mut [f32]>,
     (h, w): (usize, usize),
 ) -> geltip::Result<Vec<GroundTruth>> {
-    type Job<'a> = (usize, &'a [Contact], &'a mut [u8], Option<&'a mut [f32]>);
+    type Job<'a> = (usize, &'a [Press], &'a mut [u8], Option<&'a mut [f32]>);
     // A submission's index and its labels.
     type Labelled = (usize, Vec<GroundTruth>);
     let (frame_rgb, frame_px) = (h * w * 3, h * w);
@@ -1085,45 +1085,14 @@ impl Simulator {
         depth_out: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let presses = self.presses(contacts)?;
-        let mut list = Vec::with_capacity(presses.len());
-        for (k, p) in presses.into_iter().enumerate() {
-            match p.hold {
-                Hold::Surface {
-                    place,
-                    azimuth_deg,
-                    spin_deg,
-                    tilt_deg,
-                    tilt_towards_deg,
-                    depth_mm,
-                } => {
-                    if tilt_deg != 0.0 || tilt_towards_deg != 0.0 {
-                        return Err(bad(
-                            format!("contacts[{k}].tilt"),
-                            "render_batch renders contacts without tilt; use render() for tilted objects",
-                        ));
-                    }
-                    // What `Renderer::render_batch` would refuse (halfway through the
-                    // batch, without saying which contact), refused up front with the
-                    // library's messages and the contact's index.
-                    p.hold
-                        .check()
-                        .map_err(|e| bad(format!("contacts[{k}]"), e.to_string()))?;
-                    list.push(Contact {
-                        object: p.object,
-                        place,
-                        azimuth_deg,
-                        spin_deg,
-                        depth_mm,
-                    });
-                }
-                Hold::Pose { .. } => {
-                    return Err(bad(
-                        format!("contacts[{k}].pose"),
-                        "render_batch renders contacts placed by at/depth; use render(pose=...) for poses",
-                    ))
-                }
-            }
+        // A press the library would refuse halfway through the batch, refused up front
+        // with the contact's index.
+        for (k, p) in presses.iter().enumerate() {
+            p.hold
+                .check()
+                .map_err(|e| bad(format!("contacts[{k}]"), e.to_string()))?;
         }
+        let list = presses;
         let n = list.len();
         let sensor = &self.sensor.get().inner;
         let (h, w) = (sensor.height as usize, sensor.width as usize);

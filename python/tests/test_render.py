@@ -96,6 +96,17 @@ def test_batch_equals_single_renders(sim):
     assert len({images[k].tobytes() for k in range(len(contacts))}) == len(contacts)
 
 
+def test_a_batch_takes_tilted_and_posed_contacts_as_render_does(sim):
+    # One input type: what render() takes, render_batch() takes, frame for frame.
+    tilted = dict(object="cone", at=("s", 4), azimuth=200, tilt=20, tilt_towards=90, depth=0.8)
+    image, labels = sim.render(**tilted)[:2]
+    posed = dict(object="cone", pose=labels["pose"])
+    images, batch_labels, _ = sim.render_batch([tilted, posed])
+    np.testing.assert_array_equal(images[0], image)
+    np.testing.assert_array_equal(images[1], sim.render(**posed)[0])
+    assert batch_labels[0]["tilt_deg"] == labels["tilt_deg"]
+
+
 def test_streams_share_a_batch_and_render_the_same_frames(sim):
     # Three renderers on devices of their own split the submissions between them, at the
     # same time: the frames, depth maps and labels are those of one renderer, in order.
@@ -218,7 +229,7 @@ def test_render_errors_match_cli(sim, cli, tmp_path):
         (lambda sim: sim.render_batch([dict(object="sphere", at="rotation=1", depth=1), dict(object="sphere", at="rotation=2")]), r"^contacts\[1\]\.depth: required"),
         (lambda sim: sim.render_batch([dict(object="sphere", at="rotation=1", depth=-2)]), r"^contacts\[0\]: depth: a press depth cannot be negative"),
         (lambda sim: sim.render_batch([dict(object="sphere", at="rotation=1", dpth=1)]), r"^contacts\[0\]\.dpth: unknown key"),
-        (lambda sim: sim.render_batch([dict(object="sphere", at="rotation=1", depth=1, tilt=10)]), r"^contacts\[0\]\.tilt"),
+        (lambda sim: sim.render_batch([dict(object="sphere", at="rotation=1", depth=1, tilt=95)]), r"^contacts\[0\]: tilt: must lie in"),
         (lambda sim: sim.render_batch(["sphere"]), r"^contacts\[0\]: expected a dict"),
         (lambda sim: sim.render_batch(3), "^contacts: expected a list"),
         (lambda sim: sim.render_batch([dict(object="sphere", at="rotation=1", depth=1)], out=np.zeros((2, 480, 640, 3), np.uint8)), "^out: expected shape"),

@@ -9,7 +9,7 @@ use crate::object::{Object, Solid};
 use crate::output;
 use crate::plot;
 use crate::render::gpu::Renderer;
-use crate::render::{Contact, GroundTruth, Place};
+use crate::render::{GroundTruth, Place, Press};
 use crate::sensor::Sensor;
 use glam::DVec3;
 use std::fmt::Write as _;
@@ -253,20 +253,17 @@ impl Report {
 }
 
 /// All the paper's taps: the seven solids' eight each, solid by solid (56).
-pub fn all_taps(protocol: &Protocol) -> Vec<Contact> {
+pub fn all_taps(protocol: &Protocol) -> Vec<Press> {
     Solid::ALL.iter().flat_map(|&s| taps(s, protocol)).collect()
 }
 
 /// The paper's eight taps of `object`, as [`run`] renders them.
-pub fn taps(object: Solid, protocol: &Protocol) -> Vec<Contact> {
+pub fn taps(object: Solid, protocol: &Protocol) -> Vec<Press> {
     POSITIONS
         .iter()
-        .map(|(place, _)| Contact {
-            object: Arc::new(Object::Solid(object)),
-            place: *place,
-            azimuth_deg: protocol.azimuth_deg,
-            spin_deg: 0.0,
-            depth_mm: protocol.depth_mm,
+        .map(|(place, _)| {
+            let object = Arc::new(Object::Solid(object));
+            Press::at(object, *place, protocol.azimuth_deg, protocol.depth_mm)
         })
         .collect()
 }

@@ -11,7 +11,7 @@ use crate::object::{Object, Solid};
 use crate::output;
 use crate::plot;
 use crate::render::gpu::Renderer;
-use crate::render::{Contact, GroundTruth, Place, Press};
+use crate::render::{GroundTruth, Place, Press};
 use crate::sensor::Sensor;
 use crate::view;
 use image::RgbImage;
@@ -107,14 +107,9 @@ pub struct Report {
     pub two_contacts: TwoContactTrials,
 }
 
-fn sphere(s: f64, azimuth_deg: f64, depth: f64) -> Contact {
-    Contact {
-        object: Arc::new(Object::Solid(Solid::Sphere)),
-        place: Place::ArcLength(s),
-        azimuth_deg,
-        spin_deg: 0.0,
-        depth_mm: depth,
-    }
+fn sphere(s: f64, azimuth_deg: f64, depth: f64) -> Press {
+    let object = Arc::new(Object::Solid(Solid::Sphere));
+    Press::at(object, Place::ArcLength(s), azimuth_deg, depth)
 }
 
 /// The visible contact positions: (s, azimuth) pairs.
@@ -209,7 +204,7 @@ pub fn run(
         let mut renderer = Renderer::new(&variant)?;
         let localiser = Localiser::new(&variant);
         let reference = renderer.render_empty()?.to_rgb();
-        let mut contacts: Vec<Contact> = Vec::new();
+        let mut contacts: Vec<Press> = Vec::new();
         for &depth in &sweep.depths {
             for &(s, az) in &places {
                 contacts.push(sphere(s, az, depth));
@@ -219,7 +214,7 @@ pub fn run(
         // Two simultaneous contacts: opposite azimuths at each visible arc length, at the
         // sweep's deepest depth.
         let pair_depth = sweep.depths.iter().cloned().fold(0.0, f64::max);
-        let mut pair_contacts: Vec<(Contact, GroundTruth)> = Vec::new();
+        let mut pair_contacts: Vec<(Press, GroundTruth)> = Vec::new();
         for chunk in contacts.chunks(16) {
             let rendered = renderer.render_batch(chunk)?;
             for ((frame, truth), contact) in rendered.into_iter().zip(chunk) {
@@ -348,7 +343,7 @@ fn two_contact_trials(
     renderer: &mut Renderer,
     localiser: &Localiser,
     reference: &RgbImage,
-    contacts: &[(Contact, GroundTruth)],
+    contacts: &[(Press, GroundTruth)],
     sweep: &Sweep,
 ) -> Result<TwoContactTrials> {
     let n = contacts.len();
@@ -361,7 +356,7 @@ fn two_contact_trials(
     for i in 0..n.saturating_sub(half) {
         let (a, ta) = &contacts[i];
         let (b, tb) = &contacts[i + half];
-        let (frame, _) = renderer.render_scene(&[Press::from(a), Press::from(b)])?;
+        let (frame, _) = renderer.render_scene(&[a.clone(), b.clone()])?;
         scenes.push((frame.to_rgb(), ta, tb));
     }
     let mut out = Vec::new();

@@ -22,7 +22,7 @@ use crate::object::{Object, SdfGrid, Solid, MESH_PAD_MM, MESH_VOXEL_MM};
 use crate::output;
 use crate::plot;
 use crate::render::gpu::Renderer;
-use crate::render::{Contact, Frame, GroundTruth};
+use crate::render::{Frame, GroundTruth, Press};
 use crate::sensor::Sensor;
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -214,7 +214,7 @@ pub fn pareto_front_within(points: &[(f64, Vec<f64>)], tol: &Tolerance) -> Vec<b
 
 /// The contacts: one per tap position of the paper, each with another solid (all eight), or
 /// every other one of them (four: tip, 45°, junction, 10 mm down) for a quick run.
-pub fn contacts(all: bool) -> Vec<Contact> {
+pub fn contacts(all: bool) -> Vec<Press> {
     (0..experiment::POSITIONS.len())
         .filter(|i| all || i % 2 == 0)
         .map(|i| {
@@ -250,7 +250,7 @@ pub fn sensor_for(sensor: &Sensor, knobs: &Knobs) -> Result<Sensor> {
 }
 
 /// The contacts with their solids baked into meshes on voxels of `voxel_mm`.
-fn as_meshes(list: &[Contact], voxel_mm: f64) -> Result<Vec<Contact>> {
+fn as_meshes(list: &[Press], voxel_mm: f64) -> Result<Vec<Press>> {
     let mut baked: HashMap<String, Arc<Object>> = HashMap::new();
     list.iter()
         .map(|c| {
@@ -271,9 +271,9 @@ fn as_meshes(list: &[Contact], voxel_mm: f64) -> Result<Vec<Contact>> {
                     o
                 }
             };
-            Ok(Contact {
+            Ok(Press {
                 object,
-                ..c.clone()
+                hold: c.hold,
             })
         })
         .collect()
@@ -320,7 +320,7 @@ pub struct Report {
 pub fn run(
     sensor: &Sensor,
     configs: &[Knobs],
-    list: &[Contact],
+    list: &[Press],
     rounds: usize,
     out: Option<&Path>,
     mut progress: impl FnMut(&str),
@@ -336,7 +336,7 @@ pub fn run(
     let mut adapter = String::new();
     let mut rows = Vec::new();
     // Each configuration's renderer and contacts, kept for the speed rounds.
-    let mut timed: Vec<(Renderer, Vec<Contact>)> = Vec::new();
+    let mut timed: Vec<(Renderer, Vec<Press>)> = Vec::new();
     let default = Knobs::default_for(sensor);
     for knobs in configs {
         let t0 = Instant::now();

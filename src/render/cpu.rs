@@ -1,7 +1,7 @@
 //! The whole pipeline on the CPU, stage by stage, from the CPU mirrors: slow (seconds per
 //! frame) but independent of any GPU, so tests can hold the GPU renderer to it.
 
-use super::{camera, contact, elastomer, leds, touched, Contact, Frame, HeightfieldGrid, Rect};
+use super::{camera, contact, elastomer, leds, touched, Frame, HeightfieldGrid, Press, Rect};
 use crate::error::Result;
 use crate::sensor::Sensor;
 use glam::DVec2;
@@ -21,7 +21,7 @@ pub struct CpuRender {
 }
 
 /// Renders `contact` (or the empty finger) with the CPU mirrors, over the whole image.
-pub fn render(sensor: &Sensor, contact: Option<&Contact>) -> Result<CpuRender> {
+pub fn render(sensor: &Sensor, contact: Option<&Press>) -> Result<CpuRender> {
     let grid = HeightfieldGrid::for_sensor(sensor);
     let n = grid.texels as usize;
     let (mut penetration, mut height, mut over, mut footprint) =
@@ -106,7 +106,7 @@ pub fn render_contact(
     sensor: &Sensor,
     grid: &HeightfieldGrid,
     reference: &Frame,
-    contact: &Contact,
+    contact: &Press,
 ) -> Result<Frame> {
     let mut frame = reference.clone();
     let pose = contact.pose(sensor)?;

@@ -25,7 +25,7 @@ use crate::sensor::Sensor;
 use glam::{DVec2, DVec3};
 
 /// The contact types the renderer's callers name with it (defined in [`crate::scene`]).
-pub use crate::scene::{Contact, ContactPose, Hold, Place, Press};
+pub use crate::scene::{ContactPose, Hold, Place, Press};
 
 /// Ground truth of one rendered contact.
 #[derive(Debug, Clone, PartialEq)]

@@ -3,7 +3,7 @@
 //! - [`spec`]: one contact as data ([`ContactSpec`]: the fields of the command line's
 //!   flags, scene files and the Python package) checked into a [`Press`], and scene files.
 //! - [`place`]: where on the finger ([`Place`]).
-//! - [`pose`]: how an object is held ([`Hold`], [`Press`], [`Contact`]) and the
+//! - [`pose`]: how an object is held ([`Hold`], [`Press`]) and the
 //!   [`ContactPose`] it takes on a sensor's finger.
 //! - [`first_touch`]: where an object brought towards the finger first touches it.
 //!
@@ -16,5 +16,5 @@ pub mod pose;
 pub mod spec;
 
 pub use place::{Place, PLACE_KEYS};
-pub use pose::{Contact, ContactPose, Hold, Press};
+pub use pose::{ContactPose, Hold, Press};
 pub use spec::{load_scene, naming_contact, At, ContactSpec};

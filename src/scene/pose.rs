@@ -1,4 +1,4 @@
-//! How an object is held against the finger ([`Hold`], [`Press`], the simple [`Contact`])
+//! How an object is held against the finger ([`Hold`], [`Press`])
 //! and where that puts it ([`Press::pose`]): at a place, brought along the normal to its
 //! first touch and pressed on, or as a rigid pose.
 
@@ -12,19 +12,6 @@ use crate::render::{heightfield_extent, margin_mm, HeightfieldGrid};
 use crate::sensor::Sensor;
 use glam::{DMat3, DVec3};
 use std::sync::Arc;
-
-/// One object pressed into the finger.
-#[derive(Debug, Clone)]
-pub struct Contact {
-    pub object: Arc<Object>,
-    pub place: Place,
-    /// Azimuth of the contact about the finger's axis, degrees (0 = image +x).
-    pub azimuth_deg: f64,
-    /// The object's own rotation about the contact normal, degrees.
-    pub spin_deg: f64,
-    /// How far the object is pressed in along the normal, mm.
-    pub depth_mm: f64,
-}
 
 /// How an object is held against the finger.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,28 +38,11 @@ pub enum Hold {
     },
 }
 
-/// One object held against the finger, in any pose: the general form of [`Contact`]
-/// (which is a `Press` with no tilt).
+/// One object held against the finger, in any pose: what every render call takes.
 #[derive(Debug, Clone)]
 pub struct Press {
     pub object: Arc<Object>,
     pub hold: Hold,
-}
-
-impl From<&Contact> for Press {
-    fn from(c: &Contact) -> Press {
-        Press {
-            object: c.object.clone(),
-            hold: Hold::Surface {
-                place: c.place,
-                azimuth_deg: c.azimuth_deg,
-                spin_deg: c.spin_deg,
-                tilt_deg: 0.0,
-                tilt_towards_deg: 0.0,
-                depth_mm: c.depth_mm,
-            },
-        }
-    }
 }
 
 /// Where a contact sits and how its object is oriented, in the camera frame.
@@ -233,14 +203,32 @@ impl Hold {
     }
 }
 
-impl Contact {
-    /// Checks the contact's numbers and places it on `sensor`'s finger.
-    pub fn pose(&self, sensor: &Sensor) -> Result<ContactPose> {
-        Press::from(self).pose(sensor)
-    }
-}
-
 impl Press {
+    /// `object` pressed `depth_mm` into the finger at `place`, `azimuth_deg` about the
+    /// finger's axis (0 = image +x), its axis along the inward normal: the paper's taps.
+    pub fn at(object: Arc<Object>, place: Place, azimuth_deg: f64, depth_mm: f64) -> Press {
+        Press {
+            object,
+            hold: Hold::Surface {
+                place,
+                azimuth_deg,
+                spin_deg: 0.0,
+                tilt_deg: 0.0,
+                tilt_towards_deg: 0.0,
+                depth_mm,
+            },
+        }
+    }
+
+    /// The same press with the object turned `spin_deg` about the contact normal (a pose
+    /// has no spin to set and is returned as it is).
+    pub fn spun(mut self, spin_deg: f64) -> Press {
+        if let Hold::Surface { spin_deg: s, .. } = &mut self.hold {
+            *s = spin_deg;
+        }
+        self
+    }
+
     /// The object's name.
     pub fn name(&self) -> &str {
         self.object.name()

@@ -3,19 +3,13 @@
 #![allow(dead_code)]
 
 use geltip::object::{Object, Solid};
-use geltip::render::{Contact, Frame, Place};
+use geltip::render::{Frame, Place, Press};
 use geltip::sensor::Sensor;
 use std::sync::Arc;
 
 /// `solid` pressed `depth` mm at `place`, at azimuth 30 degrees.
-pub fn contact(solid: Solid, place: Place, depth: f64) -> Contact {
-    Contact {
-        object: Arc::new(Object::Solid(solid)),
-        place,
-        azimuth_deg: 30.0,
-        spin_deg: 0.0,
-        depth_mm: depth,
-    }
+pub fn contact(solid: Solid, place: Place, depth: f64) -> Press {
+    Press::at(Arc::new(Object::Solid(solid)), place, 30.0, depth)
 }
 
 /// A small sensor for CPU-vs-GPU comparisons (the CPU mirror is slow at full size). 150 px

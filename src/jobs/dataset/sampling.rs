@@ -5,7 +5,7 @@
 use crate::error::{GeltipError, Result};
 use crate::finger::SurfaceCoord;
 use crate::object::Object;
-use crate::render::{self, Contact, Place};
+use crate::render::{self, Place, Press};
 use crate::sensor::Sensor;
 use std::sync::Arc;
 
@@ -60,14 +60,8 @@ pub fn make_contact(
     azimuth_deg: f64,
     spin_deg: f64,
     depth_mm: f64,
-) -> Contact {
-    Contact {
-        object,
-        place: Place::ArcLength(s_mm),
-        azimuth_deg,
-        spin_deg,
-        depth_mm,
-    }
+) -> Press {
+    Press::at(object, Place::ArcLength(s_mm), azimuth_deg, depth_mm).spun(spin_deg)
 }
 
 /// Arc length (mm) from the tip of the farthest surface point the lens can see.
@@ -83,7 +77,7 @@ pub fn sample_contact(
     depth_range: (f64, f64),
     seed: u64,
     k: u64,
-) -> Result<Contact> {
+) -> Result<Press> {
     let s_max = visible_arc_length(sensor);
     for attempt in 0..MAX_ATTEMPTS {
         let mut rng = SampleRng::new(&[seed, k, STREAM_CONTACT, attempt]);
@@ -119,6 +113,7 @@ pub fn load_objects(names: &[String]) -> Result<Vec<Arc<Object>>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::Hold;
 
     #[test]
     fn draws_depend_on_seed_and_index_only() {
@@ -146,9 +141,17 @@ mod tests {
         for k in 0..200 {
             let c = sample_contact(&sensor, &objects, (0.3, 1.2), 5, k).unwrap();
             let again = sample_contact(&sensor, &objects, (0.3, 1.2), 5, k).unwrap();
-            assert_eq!(c.place, again.place);
-            assert!((0.3..=1.2).contains(&c.depth_mm));
-            assert!((0.0..360.0).contains(&c.azimuth_deg));
+            assert_eq!(c.hold, again.hold);
+            let Hold::Surface {
+                azimuth_deg,
+                depth_mm,
+                ..
+            } = c.hold
+            else {
+                panic!("sample {k} is not held at a place");
+            };
+            assert!((0.3..=1.2).contains(&depth_mm));
+            assert!((0.0..360.0).contains(&azimuth_deg));
             let pose = c.pose(&sensor).unwrap();
             assert!(sensor.project(pose.point).is_ok());
         }

@@ -34,7 +34,7 @@ use crate::error::Result;
 use crate::gpu::GpuContext;
 use crate::object::Object;
 use crate::render::uniforms::{object_kind, FrameUniform, SensorUniform};
-use crate::render::{Contact, Frame, GroundTruth, HeightfieldGrid, Press, Rect};
+use crate::render::{Frame, GroundTruth, HeightfieldGrid, Press, Rect};
 use crate::sensor::Sensor;
 use pipelines::Pipelines;
 use resources::{whole_image, Resources};
@@ -169,18 +169,18 @@ impl Renderer {
         Ok(())
     }
 
-    /// Renders one contact.
-    pub fn render(&mut self, contact: &Contact) -> Result<(Frame, GroundTruth)> {
-        let mut out = self.render_batch(std::slice::from_ref(contact))?;
+    /// Renders one press.
+    pub fn render(&mut self, press: &Press) -> Result<(Frame, GroundTruth)> {
+        let mut out = self.render_batch(std::slice::from_ref(press))?;
         Ok(out.remove(0))
     }
 
-    /// Renders contacts in batches of up to [`MAX_BATCH`] per submission.
-    pub fn render_batch(&mut self, contacts: &[Contact]) -> Result<Vec<(Frame, GroundTruth)>> {
-        let mut out = Vec::with_capacity(contacts.len());
+    /// Renders presses, a frame each, in batches of up to [`MAX_BATCH`] per submission.
+    pub fn render_batch(&mut self, presses: &[Press]) -> Result<Vec<(Frame, GroundTruth)>> {
+        let mut out = Vec::with_capacity(presses.len());
         let mut total = Timings::default();
         let preparer = self.preparer();
-        for chunk in contacts.chunks(MAX_BATCH) {
+        for chunk in presses.chunks(MAX_BATCH) {
             let start = Instant::now();
             let batch = preparer.prepare(chunk)?;
             total.prepare += start.elapsed();

@@ -6,7 +6,7 @@ use crate::error::{GeltipError, Result};
 use crate::render::contact::{self, Footprint, IndentationLabels};
 use crate::render::uniforms::FrameUniform;
 use crate::render::Rect;
-use crate::render::{elastomer, Contact, ContactPose, GroundTruth, HeightfieldGrid, Hold, Press};
+use crate::render::{elastomer, ContactPose, GroundTruth, HeightfieldGrid, Hold, Press};
 use crate::sensor::Sensor;
 use rayon::prelude::*;
 
@@ -58,11 +58,12 @@ pub struct Preparer {
 }
 
 impl Preparer {
-    /// Prepares contacts for one submission (at most [`MAX_BATCH`] render in one).
-    pub fn prepare(&self, contacts: &[Contact]) -> Result<PreparedBatch> {
-        contacts
+    /// Prepares presses for one submission, a frame each (at most [`MAX_BATCH`] render in
+    /// one).
+    pub fn prepare(&self, presses: &[Press]) -> Result<PreparedBatch> {
+        presses
             .iter()
-            .map(|c| prepare(&self.sensor, &self.grid, &Press::from(c)))
+            .map(|p| prepare(&self.sensor, &self.grid, p))
             .collect::<Result<Vec<_>>>()
             .map(PreparedBatch)
     }

@@ -5,19 +5,19 @@ use super::prepare::Prepared;
 use super::record::Recorder;
 use super::Renderer;
 use crate::error::Result;
-use crate::render::Contact;
+use crate::render::Press;
 use std::time::{Duration, Instant};
 
 impl Renderer {
-    /// Renders one contact and returns each stage's time, then the readback's (slower than
+    /// Renders one press and returns each stage's time, then the readback's (slower than
     /// [`Renderer::render`]). Where the device writes timestamps between commands (lavapipe
     /// does), the frame is recorded and submitted once, as [`Renderer::render`] does, with a
     /// timestamp after each stage: a stage's time is then its own work, not a submission's
     /// and a wait's (the skin normals end their pass, which a frame shares with the tile
     /// list). Elsewhere each stage is submitted and waited for on its own, and its wall time
     /// includes both. The readback is timed on the CPU either way.
-    pub fn profile_stages(&mut self, contact: &Contact) -> Result<Vec<(&'static str, Duration)>> {
-        let prepared = self.preparer().prepare(std::slice::from_ref(contact))?.0;
+    pub fn profile_stages(&mut self, press: &Press) -> Result<Vec<(&'static str, Duration)>> {
+        let prepared = self.preparer().prepare(std::slice::from_ref(press))?.0;
         for p in &prepared {
             self.ready_object(p.uniform.object_kind, &p.press.object)?;
         }
