@@ -2,7 +2,7 @@
 //
 // Twin of src/object/solids.rs: every constant OBJ_X here is `dims::X` there, and every
 // obj_* function mirrors the Rust function of the same name (without the prefix). Change
-// both together; tests/objects.rs checks that the constants agree and that this file
+// both together; tests/objects_wgsl.rs checks that the constants agree and that this file
 // validates with naga.
 //
 // Object frame: the contact top is at the origin, the body lies in z <= 0, the finger comes

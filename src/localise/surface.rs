@@ -33,13 +33,18 @@
 //!    seen obliquely is pulled towards the compressed side.
 //! 5. Confidence: `1 - detection level / peak` (0 at the level, 0.5 at twice it).
 
-use super::paper::mean_filter;
-use super::raster::{components, robust_sigma, FloatImage, NEIGHBOURS_8};
-use super::{check_sizes, Detection, NOISE_FLOOR};
+use super::raster::{components, FloatImage, NEIGHBOURS_8};
+use super::{check_sizes, Detection};
 use crate::error::Result;
+use crate::finger::{Finger, SurfacePoint};
 use crate::sensor::Sensor;
 use glam::{DVec2, DVec3};
 use image::RgbImage;
+use scale::{analyse_footprint, analyse_scale, difference_box, mostly_outside, Scale, Window};
+
+mod scale;
+#[cfg(test)]
+mod tests;
 
 /// Settings of the surface detector. The defaults suit 8-bit images of the paper's sensor.
 #[derive(Debug, Clone, PartialEq)]
@@ -155,204 +160,6 @@ impl SurfaceCache {
     }
 }
 
-/// A rectangle of pixels, `[x0, x1) x [y0, y1)`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Window {
-    x0: usize,
-    y0: usize,
-    x1: usize,
-    y1: usize,
-}
-
-impl Window {
-    fn width(&self) -> usize {
-        self.x1 - self.x0
-    }
-
-    fn height(&self) -> usize {
-        self.y1 - self.y0
-    }
-
-    /// Grown by `by` pixels on every side, clipped to a `w` x `h` image.
-    fn grown(&self, by: usize, w: usize, h: usize) -> Window {
-        Window {
-            x0: self.x0.saturating_sub(by),
-            y0: self.y0.saturating_sub(by),
-            x1: (self.x1 + by).min(w),
-            y1: (self.y1 + by).min(h),
-        }
-    }
-
-    /// The image index of the `i`-th pixel of the window (row-major in the window).
-    fn image_index(&self, i: usize, image_width: usize) -> usize {
-        (self.y0 + i / self.width()) * image_width + self.x0 + i % self.width()
-    }
-}
-
-/// The bounding box of the pixels where `frame` differs from `reference` (RGB8, `w` wide),
-/// or `None` when they are identical.
-fn difference_box(reference: &[u8], frame: &[u8], w: usize) -> Option<Window> {
-    let row_bytes = 3 * w;
-    let mut bbox: Option<Window> = None;
-    for (y, (a, b)) in reference
-        .chunks_exact(row_bytes)
-        .zip(frame.chunks_exact(row_bytes))
-        .enumerate()
-    {
-        if a == b {
-            continue;
-        }
-        let first = a.iter().zip(b).position(|(p, q)| p != q).unwrap_or(0) / 3;
-        let last = a.iter().zip(b).rposition(|(p, q)| p != q).unwrap_or(0) / 3;
-        bbox = Some(match bbox {
-            None => Window {
-                x0: first,
-                y0: y,
-                x1: last + 1,
-                y1: y + 1,
-            },
-            Some(r) => Window {
-                x0: r.x0.min(first),
-                y0: r.y0,
-                x1: r.x1.max(last + 1),
-                y1: y + 1,
-            },
-        });
-    }
-    bbox
-}
-
-/// The difference seen at one smoothing scale, over `window` (zero outside it).
-struct Scale {
-    size: usize,
-    window: Window,
-    /// Row-major (in the window) norm of the smoothed signed difference (0 where the pixel
-    /// sees no finger).
-    magnitude: Vec<f64>,
-    /// RMS of that norm under noise alone.
-    sigma: f64,
-    peak: f64,
-    detect_level: f64,
-}
-
-/// Over the whole frame: the noise estimated from every pixel that sees the finger.
-fn analyse_scale(
-    signed: &FloatImage,
-    cache: &SurfaceCache,
-    size: usize,
-    config: &SurfaceConfig,
-) -> Scale {
-    let smooth = mean_filter(signed, size);
-    let mut sigma2 = 0.0;
-    let mut values = vec![0.0; cache.valid.len()];
-    for c in 0..3 {
-        for (v, &i) in values.iter_mut().zip(&cache.valid) {
-            *v = smooth.data[3 * i + c];
-        }
-        sigma2 += robust_sigma(&mut values).powi(2);
-    }
-    let sigma = sigma2.sqrt().max(NOISE_FLOOR);
-    let mut magnitude = vec![0.0; cache.areas.len()];
-    let mut peak = 0.0f64;
-    for &i in &cache.valid {
-        let m = smooth.pixel(i).iter().map(|v| v * v).sum::<f64>().sqrt();
-        magnitude[i] = m;
-        peak = peak.max(m);
-    }
-    Scale {
-        size,
-        window: Window {
-            x0: 0,
-            y0: 0,
-            x1: signed.width as usize,
-            y1: signed.height as usize,
-        },
-        magnitude,
-        sigma,
-        peak,
-        detect_level: (config.detect_snr * sigma).max(config.min_peak),
-    }
-}
-
-/// Over the difference's footprint only, for a frame that equals the reference outside
-/// `bbox` (no sensor noise): the same numbers as [`analyse_scale`], at a fraction of the
-/// cost. The smoothed difference is exactly 0 farther than `size / 2` from `bbox` (the
-/// differences are whole grey levels, so the box sums are exact), so only the window
-/// `bbox` grown by `size / 2` can be non-zero; it is filtered from a crop grown by `size`
-/// (whose edges are the image's wherever the window's window reaches them, so the mirrored
-/// border samples are the same). When more than half of the pixels that see the finger lie
-/// outside the window, the median of each channel and of its absolute deviations is 0, so
-/// the robust noise is 0 and `sigma` is the floor. The caller checks that condition.
-fn analyse_footprint(
-    reference: &RgbImage,
-    frame: &RgbImage,
-    bbox: Window,
-    cache: &SurfaceCache,
-    size: usize,
-    config: &SurfaceConfig,
-) -> Scale {
-    let (w, h) = (frame.width() as usize, frame.height() as usize);
-    let half = (size.max(1) | 1) / 2;
-    let window = bbox.grown(half, w, h);
-    let crop = bbox.grown(2 * half, w, h);
-    let (a, b) = (reference.as_raw(), frame.as_raw());
-    let mut data = Vec::with_capacity(crop.width() * crop.height() * 3);
-    for y in crop.y0..crop.y1 {
-        let row = (y * w + crop.x0) * 3..(y * w + crop.x1) * 3;
-        data.extend(
-            a[row.clone()]
-                .iter()
-                .zip(&b[row])
-                .map(|(&p, &q)| q as f64 - p as f64),
-        );
-    }
-    let signed = FloatImage {
-        width: crop.width() as u32,
-        height: crop.height() as u32,
-        channels: 3,
-        data,
-    };
-    let smooth = mean_filter(&signed, size);
-    let sigma = NOISE_FLOOR;
-    let mut magnitude = vec![0.0; window.width() * window.height()];
-    let mut peak = 0.0f64;
-    for (k, m) in magnitude.iter_mut().enumerate() {
-        let i = window.image_index(k, w);
-        if cache.areas[i] <= 0.0 {
-            continue;
-        }
-        let (x, y) = (
-            window.x0 + k % window.width(),
-            window.y0 + k / window.width(),
-        );
-        let c = (y - crop.y0) * crop.width() + (x - crop.x0);
-        *m = smooth.pixel(c).iter().map(|v| v * v).sum::<f64>().sqrt();
-        peak = peak.max(*m);
-    }
-    Scale {
-        size,
-        window,
-        magnitude,
-        sigma,
-        peak,
-        detect_level: (config.detect_snr * sigma).max(config.min_peak),
-    }
-}
-
-/// Whether more than half of the pixels that see the finger lie outside `window`.
-fn mostly_outside(cache: &SurfaceCache, window: Window) -> bool {
-    let w = cache.width as usize;
-    let inside: usize = (window.y0..window.y1)
-        .map(|y| {
-            cache.areas[y * w + window.x0..y * w + window.x1]
-                .iter()
-                .filter(|&&a| a > 0.0)
-                .count()
-        })
-        .sum();
-    2 * (cache.valid.len() - inside) > cache.valid.len()
-}
-
 /// One candidate region: its component, surface area, area-weighted sum of points and
 /// extent.
 struct Candidate {
@@ -392,62 +199,23 @@ fn detect_with(
     allow_footprint: bool,
 ) -> Result<Detection> {
     check_sizes(reference, frame, Some(sensor))?;
-    if cache.areas.len() != frame.as_raw().len() / 3 {
-        return Err(crate::error::GeltipError::input(
-            "surface cache",
-            format!(
-                "built for {}x{} images, not {}x{}",
-                cache.width,
-                cache.height,
-                frame.width(),
-                frame.height()
-            ),
-        ));
-    }
-    let (w, h) = (sensor.width, sensor.height);
-    let Some(bbox) = difference_box(reference.as_raw(), frame.as_raw(), w as usize) else {
+    check_cache(cache, frame)?;
+    let Some(bbox) = difference_box(reference.as_raw(), frame.as_raw(), sensor.width as usize)
+    else {
         return Ok(Detection::none(
             0,
             "the frame does not differ from the reference",
         ));
     };
-    // Noise-free frames differ only around the contact: work on that footprint when the
-    // noise estimate is known to be the floor there (see `analyse_footprint`).
-    let largest = config.scales.iter().copied().max().unwrap_or(1).max(1) | 1;
-    let footprint =
-        allow_footprint && mostly_outside(cache, bbox.grown(largest / 2, w as usize, h as usize));
-    let signed = (!footprint).then(|| FloatImage {
-        width: w,
-        height: h,
-        channels: 3,
-        data: reference
-            .as_raw()
-            .iter()
-            .zip(frame.as_raw())
-            .map(|(&a, &b)| b as f64 - a as f64)
-            .collect(),
-    });
-
-    // Detection: the finest scale at which the contact clears the level, else the one
-    // that came closest (for the note).
-    let mut best: Option<Scale> = None;
-    for &size in &config.scales {
-        let scale = match &signed {
-            Some(signed) => analyse_scale(signed, cache, size, config),
-            None => analyse_footprint(reference, frame, bbox, cache, size, config),
-        };
-        let passes = scale.peak >= scale.detect_level;
-        let closer = best
-            .as_ref()
-            .is_none_or(|b| scale.peak / scale.detect_level > b.peak / b.detect_level);
-        if passes || closer {
-            best = Some(scale);
-        }
-        if passes {
-            break;
-        }
-    }
-    let Some(scale) = best else {
+    let Some(scale) = detection_scale(
+        sensor,
+        cache,
+        config,
+        reference,
+        frame,
+        bbox,
+        allow_footprint,
+    ) else {
         return Ok(Detection::none(0, "no smoothing scales configured"));
     };
     let Scale {
@@ -468,37 +236,9 @@ fn detect_with(
         ));
     }
 
-    // Support and candidate regions.
     let support = (config.support_snr * sigma).max(config.relative_threshold * peak);
-    let mask: Vec<bool> = magnitude.iter().map(|&m| m > support).collect();
-    let (mut comps, _) = components(&mask, window.width() as u32, window.height() as u32);
-    // Window indices to image indices (monotone: raster order is kept).
-    for pixels in &mut comps {
-        for i in pixels.iter_mut() {
-            *i = window.image_index(*i, w as usize);
-        }
-    }
-    let mut candidates: Vec<Candidate> = comps
-        .iter()
-        .enumerate()
-        .map(|(id, pixels)| {
-            let (area, sum) = pixels.iter().fold((0.0, DVec3::ZERO), |(a, s), &i| {
-                (a + cache.areas[i], s + cache.areas[i] * cache.points[i])
-            });
-            let centre = sum / area;
-            let radius = pixels
-                .iter()
-                .map(|&i| (cache.points[i] - centre).length())
-                .fold(0.0, f64::max);
-            Candidate {
-                id,
-                area,
-                sum,
-                radius,
-            }
-        })
-        .filter(|c| c.area > 0.0 && c.sum.is_finite())
-        .collect();
+    let (comps, candidates) =
+        candidate_regions(cache, &magnitude, window, support, sensor.width as usize);
     let found = candidates.len();
     let Some(seed) =
         (0..candidates.len()).max_by(|&a, &b| candidates[a].area.total_cmp(&candidates[b].area))
@@ -508,51 +248,8 @@ fn detect_with(
             "no region above the support threshold sees the finger",
         ));
     };
-
-    // The contact: the largest region and every region near it.
-    let mut contact = candidates.swap_remove(seed);
-    let mut parts = vec![(contact.id, contact.area)];
-    while let Some(k) = candidates.iter().position(|c| {
-        (c.centre() - contact.centre()).length() <= c.radius + contact.radius + config.merge_gap_mm
-    }) {
-        let c = candidates.swap_remove(k);
-        parts.push((c.id, c.area));
-        let before = contact.centre();
-        contact.area += c.area;
-        contact.sum += c.sum;
-        let after = contact.centre();
-        contact.radius = ((before - after).length() + contact.radius)
-            .max((c.centre() - after).length() + c.radius);
-    }
-    let outline: Vec<usize> = parts
-        .iter()
-        .filter(|(_, a)| *a >= config.min_part_fraction * contact.area)
-        .flat_map(|(id, _)| comps[*id].iter().copied())
-        .collect();
-
-    // Location: the middle of the outline's extent on the tangent plane, iterated.
-    let finger = sensor.finger;
-    let mut sp = finger.point_at(finger.coord_of(contact.centre()));
-    for _ in 0..8 {
-        let (e_s, e_phi) = finger.tangents_at(finger.coord_of(sp.point));
-        let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
-        for &i in &outline {
-            let d = cache.points[i] - sp.point;
-            let ab = DVec2::new(d.dot(e_s), d.dot(e_phi));
-            lo = lo.min(ab);
-            hi = hi.max(ab);
-        }
-        let mid = 0.5 * (lo + hi);
-        if !mid.is_finite() {
-            break;
-        }
-        let next = finger.point_at(finger.coord_of(sp.point + mid.x * e_s + mid.y * e_phi));
-        let moved = (next.point - sp.point).length();
-        sp = next;
-        if moved < 1e-4 {
-            break;
-        }
-    }
+    let (centre, outline) = contact_outline(&comps, candidates, seed, config);
+    let sp = outline_middle(&sensor.finger, cache, centre, &outline);
     if !sp.point.is_finite() {
         return Ok(Detection::none(
             found,
@@ -573,115 +270,171 @@ fn detect_with(
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A smooth reference and a frame with a bump (and optional extra specks) added.
-    fn frames(
-        cx: f64,
-        cy: f64,
-        radius: f64,
-        amp: f64,
-        specks: &[(u32, u32)],
-    ) -> (RgbImage, RgbImage) {
-        let (w, h) = (640u32, 480u32);
-        let reference = RgbImage::from_fn(w, h, |u, v| {
-            image::Rgb([(60 + u / 8) as u8, (80 + v / 8) as u8, 120])
-        });
-        let mut frame = reference.clone();
-        for (u, v, p) in frame.enumerate_pixels_mut() {
-            let d2 = (u as f64 - cx).powi(2) + (v as f64 - cy).powi(2);
-            let bump = amp * (-d2 / (2.0 * radius * radius)).exp();
-            p.0[0] = (p.0[0] as f64 + bump).round().clamp(0.0, 255.0) as u8;
-            p.0[1] = (p.0[1] as f64 - 0.5 * bump).round().clamp(0.0, 255.0) as u8;
-        }
-        for &(u, v) in specks {
-            frame.get_pixel_mut(u, v).0[2] = 200;
-        }
-        (reference, frame)
+/// Refuses a cache built for another image size than `frame`'s.
+fn check_cache(cache: &SurfaceCache, frame: &RgbImage) -> Result<()> {
+    if cache.areas.len() != frame.as_raw().len() / 3 {
+        return Err(crate::error::GeltipError::input(
+            "surface cache",
+            format!(
+                "built for {}x{} images, not {}x{}",
+                cache.width,
+                cache.height,
+                frame.width(),
+                frame.height()
+            ),
+        ));
     }
+    Ok(())
+}
 
-    #[test]
-    fn the_footprint_shortcut_changes_nothing() {
-        let sensor = Sensor::preset("paper").unwrap();
-        let cache = SurfaceCache::new(&sensor);
-        let config = SurfaceConfig::default();
-        let cases = [
-            (320.0, 240.0, 6.0, 40.0, vec![]),
-            (100.0, 240.0, 10.0, 3.0, vec![]),
-            (540.0, 30.0, 4.0, 80.0, vec![]),
-            (300.0, 200.0, 5.0, 30.0, vec![(310, 215), (40, 240)]),
-            (60.0, 240.0, 30.0, 1.2, vec![]),
-            // The image's corner sees no finger; a bump on the border of the view.
-            (320.0, 2.0, 8.0, 25.0, vec![]),
-        ];
-        let mut shortcut_taken = 0;
-        for (cx, cy, r, amp, specks) in cases {
-            let (reference, frame) = frames(cx, cy, r, amp, &specks);
-            let fast = detect_with(&sensor, &cache, &config, &reference, &frame, true).unwrap();
-            let full = detect_with(&sensor, &cache, &config, &reference, &frame, false).unwrap();
-            assert_eq!(
-                fast, full,
-                "bump at ({cx}, {cy}) radius {r} amplitude {amp}"
-            );
-            let bbox = difference_box(reference.as_raw(), frame.as_raw(), 640).unwrap();
-            if !mostly_outside(&cache, bbox.grown(12, 640, 480)) {
-                continue;
+/// Detection: the difference at the finest scale at which the contact clears the level,
+/// else at the one that came closest (for the note); `None` without scales.
+fn detection_scale(
+    sensor: &Sensor,
+    cache: &SurfaceCache,
+    config: &SurfaceConfig,
+    reference: &RgbImage,
+    frame: &RgbImage,
+    bbox: Window,
+    allow_footprint: bool,
+) -> Option<Scale> {
+    let (w, h) = (sensor.width, sensor.height);
+    // Noise-free frames differ only around the contact: work on that footprint when the
+    // noise estimate is known to be the floor there (see `analyse_footprint`).
+    let largest = config.scales.iter().copied().max().unwrap_or(1).max(1) | 1;
+    let footprint =
+        allow_footprint && mostly_outside(cache, bbox.grown(largest / 2, w as usize, h as usize));
+    let signed = (!footprint).then(|| FloatImage {
+        width: w,
+        height: h,
+        channels: 3,
+        data: reference
+            .as_raw()
+            .iter()
+            .zip(frame.as_raw())
+            .map(|(&a, &b)| b as f64 - a as f64)
+            .collect(),
+    });
+    let mut best: Option<Scale> = None;
+    for &size in &config.scales {
+        let scale = match &signed {
+            Some(signed) => analyse_scale(signed, cache, size, config),
+            None => analyse_footprint(reference, frame, bbox, cache, size, config),
+        };
+        let passes = scale.peak >= scale.detect_level;
+        let closer = best
+            .as_ref()
+            .is_none_or(|b| scale.peak / scale.detect_level > b.peak / b.detect_level);
+        if passes || closer {
+            best = Some(scale);
+        }
+        if passes {
+            break;
+        }
+    }
+    best
+}
+
+/// The candidate regions: 8-connected components of the pixels of `window` whose magnitude
+/// exceeds `support` (as image indices, `image_width` wide), and those of them that see the
+/// finger.
+fn candidate_regions(
+    cache: &SurfaceCache,
+    magnitude: &[f64],
+    window: Window,
+    support: f64,
+    image_width: usize,
+) -> (Vec<Vec<usize>>, Vec<Candidate>) {
+    let mask: Vec<bool> = magnitude.iter().map(|&m| m > support).collect();
+    let (mut comps, _) = components(&mask, window.width() as u32, window.height() as u32);
+    // Window indices to image indices (monotone: raster order is kept).
+    for pixels in &mut comps {
+        for i in pixels.iter_mut() {
+            *i = window.image_index(*i, image_width);
+        }
+    }
+    let candidates = comps
+        .iter()
+        .enumerate()
+        .map(|(id, pixels)| {
+            let (area, sum) = pixels.iter().fold((0.0, DVec3::ZERO), |(a, s), &i| {
+                (a + cache.areas[i], s + cache.areas[i] * cache.points[i])
+            });
+            let centre = sum / area;
+            let radius = pixels
+                .iter()
+                .map(|&i| (cache.points[i] - centre).length())
+                .fold(0.0, f64::max);
+            Candidate {
+                id,
+                area,
+                sum,
+                radius,
             }
-            shortcut_taken += 1;
-            // Every scale's numbers, not only the outcome: bit for bit.
-            let signed = FloatImage {
-                width: 640,
-                height: 480,
-                channels: 3,
-                data: reference
-                    .as_raw()
-                    .iter()
-                    .zip(frame.as_raw())
-                    .map(|(&a, &b)| b as f64 - a as f64)
-                    .collect(),
-            };
-            for &size in &config.scales {
-                let full = analyse_scale(&signed, &cache, size, &config);
-                let part = analyse_footprint(&reference, &frame, bbox, &cache, size, &config);
-                assert_eq!(
-                    (part.sigma, part.peak),
-                    (full.sigma, full.peak),
-                    "size {size}"
-                );
-                let mut in_window = vec![false; full.magnitude.len()];
-                for (k, m) in part.magnitude.iter().enumerate() {
-                    let i = part.window.image_index(k, 640);
-                    in_window[i] = true;
-                    assert_eq!(*m, full.magnitude[i], "size {size}, pixel {i}");
-                }
-                for (i, m) in full.magnitude.iter().enumerate() {
-                    assert!(in_window[i] || *m == 0.0, "size {size}, pixel {i}: {m}");
-                }
-            }
-        }
-        assert!(
-            shortcut_taken >= 5,
-            "the shortcut was taken {shortcut_taken} times"
-        );
-    }
+        })
+        .filter(|c| c.area > 0.0 && c.sum.is_finite())
+        .collect();
+    (comps, candidates)
+}
 
-    #[test]
-    fn difference_box_bounds_every_changed_pixel() {
-        let a = vec![7u8; 3 * 10 * 4];
-        let mut b = a.clone();
-        assert_eq!(difference_box(&a, &b, 10), None);
-        b[3 * (10 + 2) + 1] = 9; // (2, 1), green
-        b[3 * (3 * 10 + 7) + 2] = 0; // (7, 3), blue
-        assert_eq!(
-            difference_box(&a, &b, 10),
-            Some(Window {
-                x0: 2,
-                y0: 1,
-                x1: 8,
-                y1: 4
-            })
-        );
+/// The contact: the `seed` region (the largest) joined by every region near it. Returns its
+/// centre and its outline: the pixels of its parts that are not specks.
+fn contact_outline(
+    comps: &[Vec<usize>],
+    mut candidates: Vec<Candidate>,
+    seed: usize,
+    config: &SurfaceConfig,
+) -> (DVec3, Vec<usize>) {
+    let mut contact = candidates.swap_remove(seed);
+    let mut parts = vec![(contact.id, contact.area)];
+    while let Some(k) = candidates.iter().position(|c| {
+        (c.centre() - contact.centre()).length() <= c.radius + contact.radius + config.merge_gap_mm
+    }) {
+        let c = candidates.swap_remove(k);
+        parts.push((c.id, c.area));
+        let before = contact.centre();
+        contact.area += c.area;
+        contact.sum += c.sum;
+        let after = contact.centre();
+        contact.radius = ((before - after).length() + contact.radius)
+            .max((c.centre() - after).length() + c.radius);
     }
+    let outline = parts
+        .iter()
+        .filter(|(_, a)| *a >= config.min_part_fraction * contact.area)
+        .flat_map(|(id, _)| comps[*id].iter().copied())
+        .collect();
+    (contact.centre(), outline)
+}
+
+/// Location: the middle of the outline's extent on the tangent plane, iterated from
+/// `centre` snapped onto the surface until it stays put.
+fn outline_middle(
+    finger: &Finger,
+    cache: &SurfaceCache,
+    centre: DVec3,
+    outline: &[usize],
+) -> SurfacePoint {
+    let mut sp = finger.point_at(finger.coord_of(centre));
+    for _ in 0..8 {
+        let (e_s, e_phi) = finger.tangents_at(finger.coord_of(sp.point));
+        let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+        for &i in outline {
+            let d = cache.points[i] - sp.point;
+            let ab = DVec2::new(d.dot(e_s), d.dot(e_phi));
+            lo = lo.min(ab);
+            hi = hi.max(ab);
+        }
+        let mid = 0.5 * (lo + hi);
+        if !mid.is_finite() {
+            break;
+        }
+        let next = finger.point_at(finger.coord_of(sp.point + mid.x * e_s + mid.y * e_phi));
+        let moved = (next.point - sp.point).length();
+        sp = next;
+        if moved < 1e-4 {
+            break;
+        }
+    }
+    sp
 }
