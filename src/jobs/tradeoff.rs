@@ -20,7 +20,6 @@ use crate::jobs::experiment::{self, Protocol};
 use crate::localise::{Localiser, Method};
 use crate::object::{Object, SdfGrid, Solid, MESH_PAD_MM, MESH_VOXEL_MM};
 use crate::output;
-use crate::plot;
 use crate::render::gpu::Renderer;
 use crate::render::{Frame, GroundTruth, Press};
 use crate::sensor::Sensor;
@@ -29,6 +28,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
+
+mod report;
 
 /// One setting of the knobs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -343,25 +344,9 @@ pub fn run(
         let variant = sensor_for(sensor, knobs)?;
         let (w, h) = (variant.width, variant.height);
         if !references.iter().any(|r| r.0 == w && r.1 == h) {
-            let best = sensor_for(
-                sensor,
-                &Knobs {
-                    texels: REFERENCE_TEXELS,
-                    ray_steps: REFERENCE_STEPS,
-                    tap_spacing: REFERENCE_TAP_SPACING,
-                    voxel_mm: None,
-                    ..*knobs
-                },
-            )?;
-            let mut r = Renderer::new(&best)?;
-            adapter = r.adapter().name.clone();
-            // One contact per submit: a batch of high-resolution renders can outlast the GPU
-            // watchdog on a software rasteriser.
-            let frames = list
-                .iter()
-                .map(|c| r.render(c).map(|(f, _)| f))
-                .collect::<Result<Vec<_>>>()?;
-            references.push((w, h, r.reference().clone(), frames));
+            let (name, empty, frames) = render_references(sensor, knobs, list)?;
+            adapter = name;
+            references.push((w, h, empty, frames));
         }
         let (_, _, ref_empty, ref_frames) = references
             .iter()
@@ -372,47 +357,126 @@ pub fn run(
             knobs.label(sensor),
             t0.elapsed().as_secs_f64()
         );
-        let scene = match knobs.voxel_mm {
-            Some(v) => as_meshes(list, v)?,
-            None => list.to_vec(),
-        };
-        let mut renderer = Renderer::new(&variant)?;
-        let localiser = Localiser::new(&variant);
-        let reference_rgb = renderer.reference().to_rgb();
-        let (mut img_err, mut loc_sum, mut found) = (0.0, 0.0, 0usize);
-        for (c, t) in scene.iter().zip(ref_frames) {
-            let (f, truth): (Frame, GroundTruth) = renderer.render(c)?;
-            img_err += image_error(&f, renderer.reference(), t, ref_empty) / scene.len() as f64;
-            let d = localiser.localise(&reference_rgb, &f.to_rgb(), Method::Surface)?;
-            if let (true, Some(p)) = (d.detected, d.point) {
-                loc_sum += (p - truth.point).length();
-                found += 1;
-            }
-        }
+        let (renderer, scene, accuracy) =
+            measure_accuracy(&variant, knobs, list, ref_empty, ref_frames)?;
         log::info!(
             "{}: accuracy done after {:.1} s",
             knobs.label(sensor),
             t0.elapsed().as_secs_f64()
         );
         let label = knobs.label(sensor);
-        timed.push((renderer, scene.clone()));
+        timed.push((renderer, scene));
         rows.push(Row {
             knobs: *knobs,
             label: label.clone(),
             is_default: *knobs == default,
             fps: f64::NAN,
-            image_error: img_err,
-            localisation_error_mm: (found > 0).then(|| loc_sum / found as f64),
-            missed: scene.len() - found,
-            contacts: scene.len(),
+            image_error: accuracy.image_error,
+            localisation_error_mm: accuracy.localisation_error_mm,
+            missed: accuracy.missed,
+            contacts: accuracy.contacts,
             on_front_image: false,
             on_front_localisation: false,
             on_front_joint: false,
         });
         progress(&label);
     }
-    // Speed rounds interleave the configurations (each round times every one in turn), so
-    // that a load which comes and goes on a shared machine weighs on all of them alike.
+    time_speed_rounds(&mut timed, &mut rows, rounds, &mut progress)?;
+    drop(timed);
+    mark_fronts(&mut rows);
+    let report = Report {
+        sensor: sensor.name.clone(),
+        adapter,
+        rows,
+    };
+    if let Some(dir) = out {
+        output::write_atomic(dir.join("tradeoff.md"), report.markdown().as_bytes())?;
+        output::write_atomic(dir.join("tradeoff.csv"), report.csv().as_bytes())?;
+        output::write_atomic(dir.join("tradeoff.svg"), report.chart()?.as_bytes())?;
+    }
+    Ok(report)
+}
+
+/// The high-resolution references at `knobs`' image size: the adapter's name, the empty
+/// finger and each contact of `list`.
+fn render_references(
+    sensor: &Sensor,
+    knobs: &Knobs,
+    list: &[Press],
+) -> Result<(String, Frame, Vec<Frame>)> {
+    let best = sensor_for(
+        sensor,
+        &Knobs {
+            texels: REFERENCE_TEXELS,
+            ray_steps: REFERENCE_STEPS,
+            tap_spacing: REFERENCE_TAP_SPACING,
+            voxel_mm: None,
+            ..*knobs
+        },
+    )?;
+    let mut r = Renderer::new(&best)?;
+    let adapter = r.adapter().name.clone();
+    // One contact per submit: a batch of high-resolution renders can outlast the GPU
+    // watchdog on a software rasteriser.
+    let frames = list
+        .iter()
+        .map(|c| r.render(c).map(|(f, _)| f))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((adapter, r.reference().clone(), frames))
+}
+
+/// One configuration's accuracy over its contacts.
+struct Accuracy {
+    image_error: f64,
+    localisation_error_mm: Option<f64>,
+    missed: usize,
+    contacts: usize,
+}
+
+/// Renders `list` (as meshes when `knobs` says so) on `variant` and scores it against the
+/// references; returns the renderer and the contacts as rendered, for the speed rounds.
+fn measure_accuracy(
+    variant: &Sensor,
+    knobs: &Knobs,
+    list: &[Press],
+    ref_empty: &Frame,
+    ref_frames: &[Frame],
+) -> Result<(Renderer, Vec<Press>, Accuracy)> {
+    let scene = match knobs.voxel_mm {
+        Some(v) => as_meshes(list, v)?,
+        None => list.to_vec(),
+    };
+    let mut renderer = Renderer::new(variant)?;
+    let localiser = Localiser::new(variant);
+    let reference_rgb = renderer.reference().to_rgb();
+    let (mut img_err, mut loc_sum, mut found) = (0.0, 0.0, 0usize);
+    for (c, t) in scene.iter().zip(ref_frames) {
+        let (f, truth): (Frame, GroundTruth) = renderer.render(c)?;
+        img_err += image_error(&f, renderer.reference(), t, ref_empty) / scene.len() as f64;
+        let d = localiser.localise(&reference_rgb, &f.to_rgb(), Method::Surface)?;
+        if let (true, Some(p)) = (d.detected, d.point) {
+            loc_sum += (p - truth.point).length();
+            found += 1;
+        }
+    }
+    let accuracy = Accuracy {
+        image_error: img_err,
+        localisation_error_mm: (found > 0).then(|| loc_sum / found as f64),
+        missed: scene.len() - found,
+        contacts: scene.len(),
+    };
+    Ok((renderer, scene, accuracy))
+}
+
+/// Sets each row's fps: the median over `rounds` speed rounds. The rounds interleave the
+/// configurations (each round times every one in turn), so that a load which comes and goes
+/// on a shared machine weighs on all of them alike.
+fn time_speed_rounds(
+    timed: &mut [(Renderer, Vec<Press>)],
+    rows: &mut [Row],
+    rounds: usize,
+    progress: &mut impl FnMut(&str),
+) -> Result<()> {
     let mut rates = vec![Vec::with_capacity(rounds); rows.len()];
     for round in 0..rounds {
         for ((renderer, scene), rates) in timed.iter_mut().zip(&mut rates) {
@@ -428,8 +492,12 @@ pub fn run(
         rates.sort_by(f64::total_cmp);
         row.fps = rates[rates.len() / 2];
     }
-    drop(timed);
-    // A configuration that misses contacts is scored as if each miss were 10 mm off.
+    Ok(())
+}
+
+/// Marks the rows on each of the three Pareto fronts. A configuration that misses contacts
+/// is scored as if each miss were 10 mm off.
+fn mark_fronts(rows: &mut [Row]) {
     let front = |errors: &dyn Fn(&Row) -> Vec<f64>, ties: Vec<f64>| {
         let points: Vec<(f64, Vec<f64>)> = rows.iter().map(|r| (r.fps, errors(r))).collect();
         pareto_front_within(
@@ -451,17 +519,6 @@ pub fn run(
         r.on_front_localisation = front_loc[i];
         r.on_front_joint = front_joint[i];
     }
-    let report = Report {
-        sensor: sensor.name.clone(),
-        adapter,
-        rows,
-    };
-    if let Some(dir) = out {
-        output::write_atomic(dir.join("tradeoff.md"), report.markdown().as_bytes())?;
-        output::write_atomic(dir.join("tradeoff.csv"), report.csv().as_bytes())?;
-        output::write_atomic(dir.join("tradeoff.svg"), report.chart()?.as_bytes())?;
-    }
-    Ok(report)
 }
 
 /// Localisation score of a row: mean error over all contacts, a miss counting 10 mm.
@@ -469,171 +526,4 @@ pub fn loc_score(r: &Row) -> f64 {
     let detected = r.contacts.saturating_sub(r.missed);
     let sum = r.localisation_error_mm.unwrap_or(0.0) * detected as f64 + 10.0 * r.missed as f64;
     sum / r.contacts.max(1) as f64
-}
-
-impl Report {
-    /// The default's row.
-    pub fn default_row(&self) -> Option<&Row> {
-        self.rows.iter().find(|r| r.is_default)
-    }
-
-    /// The table, Markdown, with a sentence on the default.
-    pub fn markdown(&self) -> String {
-        let mut md = format!(
-            "Sensor `{}`, adapter {}, {} contacts. Image error: mean |Δ| (8-bit levels) against {} texels / {} steps / analytic solids at the same image size. Localisation: surface detector, mean error (mm) of detected contacts. Front: on the Pareto front of fps against that error; joint: against both errors at once. Differences within {:.0}% fps, {} levels and {} mm count as ties (the noise between speed rounds on a shared machine and between runs of a few contacts).\n\n| configuration | fps | image error | front (image) | localisation error (mm) | missed | front (localisation) | front (joint) |\n|---|---|---|---|---|---|---|---|\n",
-            self.sensor, self.adapter, self.rows.first().map_or(0, |r| r.contacts), REFERENCE_TEXELS, REFERENCE_STEPS, 100.0 * SPEED_TIE, IMAGE_TIE, LOCALISATION_TIE_MM
-        );
-        for r in &self.rows {
-            let _ = writeln!(
-                md,
-                "| {}{} | {:.1} | {:.2} | {} | {} | {} | {} | {} |",
-                r.label,
-                if r.is_default { " (default)" } else { "" },
-                r.fps,
-                r.image_error,
-                if r.on_front_image { "yes" } else { "" },
-                r.localisation_error_mm
-                    .map_or("—".into(), |e| format!("{e:.3}")),
-                r.missed,
-                if r.on_front_localisation { "yes" } else { "" },
-                if r.on_front_joint { "yes" } else { "" },
-            );
-        }
-        if let Some(d) = self.default_row() {
-            let _ = writeln!(
-                md,
-                "\nThe default is {} the image-error front, {} the localisation front and {} the joint front.",
-                if d.on_front_image { "on" } else { "NOT on" },
-                if d.on_front_localisation {
-                    "on"
-                } else {
-                    "NOT on"
-                },
-                if d.on_front_joint { "on" } else { "NOT on" },
-            );
-        }
-        md
-    }
-
-    /// The table, CSV.
-    pub fn csv(&self) -> String {
-        let mut csv = String::from("texels,ray_steps,tap_spacing,image_scale,voxel_mm,default,fps,image_error,front_image,localisation_error_mm,missed,front_localisation,front_joint\n");
-        for r in &self.rows {
-            let _ = writeln!(
-                csv,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                r.knobs.texels,
-                r.knobs.ray_steps,
-                r.knobs.tap_spacing,
-                r.knobs.image_scale,
-                r.knobs.voxel_mm.map(|v| v.to_string()).unwrap_or_default(),
-                r.is_default,
-                r.fps,
-                r.image_error,
-                r.on_front_image,
-                r.localisation_error_mm
-                    .map(|e| e.to_string())
-                    .unwrap_or_default(),
-                r.missed,
-                r.on_front_localisation,
-                r.on_front_joint
-            );
-        }
-        csv
-    }
-
-    /// Two Pareto charts side by side (fps against image error, fps against localisation
-    /// error), the front drawn as a step line, the default ringed, every point labelled.
-    pub fn chart(&self) -> Result<String> {
-        use plotters::prelude::*;
-        let max_fps = self.rows.iter().map(|r| r.fps).fold(1.0, f64::max) * 1.15;
-        type Get = fn(&Row) -> (f64, bool);
-        let panels: [(&str, &str, Get); 2] = [
-            (
-                "image error vs reference",
-                "mean |Δ| (8-bit levels)",
-                |r| (r.image_error, r.on_front_image),
-            ),
-            (
-                "surface detector error",
-                "mean error (mm; a miss counts 10 mm)",
-                |r| (loc_score(r), r.on_front_localisation),
-            ),
-        ];
-        plot::svg("tradeoff", (1100, 480), |root| {
-            let areas = root.split_evenly((1, 2));
-            for (area, (title, ydesc, get)) in areas.iter().zip(panels) {
-                let top = self.rows.iter().map(|r| get(r).0).fold(0.01, f64::max) * 1.15;
-                let mut chart = ChartBuilder::on(area)
-                    .caption(title, ("sans-serif", 16))
-                    .margin(12)
-                    .x_label_area_size(40)
-                    .y_label_area_size(55)
-                    .build_cartesian_2d(0f64..max_fps, 0f64..top)?;
-                chart
-                    .configure_mesh()
-                    .x_desc("frames per second (one contact per submit)")
-                    .y_desc(ydesc)
-                    .draw()?;
-                let mut front: Vec<(f64, f64)> = self
-                    .rows
-                    .iter()
-                    .filter(|r| get(r).1)
-                    .map(|r| (r.fps, get(r).0))
-                    .collect();
-                front.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let mut steps = Vec::new();
-                for (i, p) in front.iter().enumerate() {
-                    if i > 0 {
-                        steps.push((front[i - 1].0, p.1));
-                    }
-                    steps.push(*p);
-                }
-                let c0 = plot::colour(0);
-                chart
-                    .draw_series(LineSeries::new(steps, c0.stroke_width(2)))?
-                    .label("Pareto front")
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 16, y)], c0.stroke_width(2))
-                    });
-                let c1 = plot::colour(1);
-                chart.draw_series(self.rows.iter().map(|r| {
-                    let (e, on) = get(r);
-                    let style = if on { c0.filled() } else { c1.filled() };
-                    Circle::new((r.fps, e), 4, style)
-                }))?;
-                if let Some(d) = self.default_row() {
-                    chart
-                        .draw_series(std::iter::once(Circle::new(
-                            (d.fps, get(d).0),
-                            9,
-                            BLACK.stroke_width(2),
-                        )))?
-                        .label("default")
-                        .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.stroke_width(2)));
-                }
-                for r in &self.rows {
-                    let mut short = format!("{}t/{}s", r.knobs.texels, r.knobs.ray_steps);
-                    if r.knobs.image_scale != 1.0 {
-                        let _ = write!(short, " x{}", r.knobs.image_scale);
-                    }
-                    if let Some(v) = r.knobs.voxel_mm {
-                        let _ = write!(short, " mesh {v}");
-                    }
-                    chart.draw_series(std::iter::once(Text::new(
-                        short,
-                        (r.fps, get(r).0),
-                        ("sans-serif", 10),
-                    )))?;
-                }
-                chart
-                    .configure_series_labels()
-                    .border_style(BLACK)
-                    .background_style(WHITE.mix(0.9))
-                    .position(SeriesLabelPosition::UpperRight)
-                    .draw()?;
-            }
-            Ok(())
-        })
-    }
 }
