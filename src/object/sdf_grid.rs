@@ -162,8 +162,15 @@ impl SdfGrid {
         let far = self.voxel_mm * f64::from(self.dims.iter().sum::<u32>());
         let mut phi = vec![far; n];
         let mut closest = vec![NONE; n];
+        self.exact_band(mesh, &mut phi, &mut closest);
+        self.sweep(mesh, &mut phi, &mut closest);
+        (phi, closest)
+    }
+
+    /// Exact distances (`phi`) and nearest triangles (`closest`) in a band around every
+    /// triangle.
+    fn exact_band(&self, mesh: &Mesh, phi: &mut [f64], closest: &mut [u32]) {
         let tri = |t: u32| mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
-        // Exact distances in a band around every triangle.
         for (t, corners) in mesh.triangles.iter().enumerate() {
             let [a, b, c] = corners.map(|i| self.to_grid(mesh.positions[i as usize]));
             let lo = a.min(b).min(c);
@@ -188,10 +195,14 @@ impl SdfGrid {
                 }
             }
         }
-        // Fast sweeping: propagate nearest triangles from neighbours, in all 8 diagonal
-        // directions, twice. Voxels within the band are exact already. A neighbour's
-        // triangle t is at least phi[nb] - |step| away (triangle inequality), which skips
-        // most exact distance evaluations.
+    }
+
+    /// Fast sweeping: propagate nearest triangles from neighbours, in all 8 diagonal
+    /// directions, twice. Voxels within the band are exact already. A neighbour's
+    /// triangle t is at least phi[nb] - |step| away (triangle inequality), which skips
+    /// most exact distance evaluations.
+    fn sweep(&self, mesh: &Mesh, phi: &mut [f64], closest: &mut [u32]) {
+        let tri = |t: u32| mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
         let exact = EXACT_BAND_VOXELS as f64 * self.voxel_mm;
         let dirs: [[i64; 3]; 8] = [
             [1, 1, 1],
@@ -263,7 +274,6 @@ impl SdfGrid {
                 }
             }
         }
-        (phi, closest)
     }
 
     /// For every voxel, how many of the three axis-aligned ray-parity tests put it inside.
