@@ -75,33 +75,52 @@ fn main() -> anyhow::Result<()> {
     let mut rows = Vec::new();
     for texels in [128, 192, 256, 384, 512] {
         for steps in [4, 8, 16] {
-            let mut r = Renderer::new(&sensor(texels, steps)?)?;
-            // Accuracy from one render of each contact (also the warm-up: renders are
-            // deterministic).
-            let (mut px, mut mm) = (0.0, 0.0);
-            for (c, t) in list.iter().zip(&truth) {
-                let (f, _) = r.render(c)?;
-                let (a, b) = error(&f, t, r.reference());
-                px += a / list.len() as f64;
-                mm += b / list.len() as f64;
-            }
-            // Speed: one contact per submit, as the render bench's headline row; the median
-            // of seven rounds (these machines are shared and noisy).
-            let mut round_fps = Vec::new();
-            for _ in 0..7 {
-                let start = Instant::now();
-                for c in &list {
-                    r.render(c)?;
-                }
-                round_fps.push(list.len() as f64 / start.elapsed().as_secs_f64());
-            }
-            round_fps.sort_by(f64::total_cmp);
-            let fps = round_fps[round_fps.len() / 2];
+            let (fps, px, mm) = measure(&list, &truth, texels, steps)?;
             println!("| {texels} | {steps} | {fps:.1} | {px:.2} | {mm:.4} |");
             rows.push((texels, steps, fps, px));
         }
     }
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/images/tradeoff.svg");
+    write_chart(path, &rows)?;
+    println!("chart: docs/images/tradeoff.svg (points labelled with heightfield texels)");
+    Ok(())
+}
+
+/// One configuration's (fps, mean abs error in 8-bit levels, indentation error in mm)
+/// against `truth`, the high-resolution renders of `list`.
+fn measure(
+    list: &[Press],
+    truth: &[Frame],
+    texels: u32,
+    steps: u32,
+) -> anyhow::Result<(f64, f64, f64)> {
+    let mut r = Renderer::new(&sensor(texels, steps)?)?;
+    // Accuracy from one render of each contact (also the warm-up: renders are
+    // deterministic).
+    let (mut px, mut mm) = (0.0, 0.0);
+    for (c, t) in list.iter().zip(truth) {
+        let (f, _) = r.render(c)?;
+        let (a, b) = error(&f, t, r.reference());
+        px += a / list.len() as f64;
+        mm += b / list.len() as f64;
+    }
+    // Speed: one contact per submit, as the render bench's headline row; the median
+    // of seven rounds (these machines are shared and noisy).
+    let mut round_fps = Vec::new();
+    for _ in 0..7 {
+        let start = Instant::now();
+        for c in list {
+            r.render(c)?;
+        }
+        round_fps.push(list.len() as f64 / start.elapsed().as_secs_f64());
+    }
+    round_fps.sort_by(f64::total_cmp);
+    Ok((round_fps[round_fps.len() / 2], px, mm))
+}
+
+/// The chart of `rows` (texels, ray steps, fps, mean abs error) written to `path`: one
+/// line per ray-step count, points labelled with their texels.
+fn write_chart(path: &str, rows: &[(u32, u32, f64, f64)]) -> anyhow::Result<()> {
     let root = SVGBackend::new(path, (760, 460)).into_drawing_area();
     root.fill(&WHITE)?;
     let max_fps = rows.iter().map(|r| r.2).fold(1.0, f64::max) * 1.1;
@@ -120,7 +139,7 @@ fn main() -> anyhow::Result<()> {
         .x_desc("frames per second (one contact per submit)")
         .y_desc("mean abs error vs 1024 texels / 48 steps (8-bit levels)")
         .draw()?;
-    // The target: 100 fps full frame on 2-core lavapipe.
+    // The speed target: 100 fps full frame on 2-core lavapipe.
     if max_fps > 100.0 {
         chart.draw_series(LineSeries::new(
             vec![(100.0, 0.0), (100.0, max_err)],
@@ -163,6 +182,5 @@ fn main() -> anyhow::Result<()> {
         .background_style(WHITE.mix(0.9))
         .draw()?;
     root.present()?;
-    println!("chart: docs/images/tradeoff.svg (points labelled with heightfield texels)");
     Ok(())
 }
