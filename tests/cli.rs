@@ -2,7 +2,7 @@
 //! one-line errors.
 
 use serde_json::Value;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn geltip(args: &[&str]) -> (i32, String, String) {
@@ -189,7 +189,21 @@ fn render_localise_round_trip() {
 #[test]
 fn bad_render_and_localise_input() {
     let out_png = temp("never.png");
-    for (args, needle) in [
+    for (args, needle) in bad_render_args() {
+        let mut all = vec!["render", "--sensor", "paper"];
+        all.extend(args);
+        all.extend(["-o", out_png.to_str().unwrap()]);
+        let (code, _, err) = geltip(&all);
+        assert_eq!(code, 1, "{all:?}");
+        assert!(error_line(&err).contains(needle), "{all:?}: {err}");
+        assert!(!out_png.exists(), "a failed render left a file");
+    }
+    bad_localise_inputs_are_refused();
+}
+
+/// Render arguments that must fail, and what the error line must say.
+fn bad_render_args() -> Vec<(Vec<&'static str>, &'static str)> {
+    vec![
         (
             vec!["--object", "sphere", "--at", "rotation=x", "--depth", "1"],
             "--at: the value of 'rotation=x' is not a number",
@@ -245,15 +259,11 @@ fn bad_render_and_localise_input() {
             vec!["--object", "pyramid", "--at", "rotation=10", "--depth", "1"],
             "pyramid",
         ),
-    ] {
-        let mut all = vec!["render", "--sensor", "paper"];
-        all.extend(args);
-        all.extend(["-o", out_png.to_str().unwrap()]);
-        let (code, _, err) = geltip(&all);
-        assert_eq!(code, 1, "{all:?}");
-        assert!(error_line(&err).contains(needle), "{all:?}: {err}");
-        assert!(!out_png.exists(), "a failed render left a file");
-    }
+    ]
+}
+
+/// A frame of the wrong size and a missing reference: one-line errors naming them.
+fn bad_localise_inputs_are_refused() {
     let small = temp("small.png");
     image::RgbImage::new(10, 10).save(&small).unwrap();
     let (code, _, err) = geltip(&[
@@ -283,6 +293,15 @@ fn bad_render_and_localise_input() {
 /// one-line errors.
 #[test]
 fn render_pose_and_scene() {
+    the_labels_pose_renders_the_same_bytes();
+    let scene = temp("scene.toml");
+    let png = temp("scene.png");
+    a_scene_labels_each_contact(&scene, &png);
+    bad_scenes_and_poses_are_one_line_errors(&scene, &png);
+}
+
+/// `--pose` with the labels' pose renders the bytes of the `--at/--spin/--tilt` render.
+fn the_labels_pose_renders_the_same_bytes() {
     let (a_png, a_json) = (temp("tilted.png"), temp("tilted.json"));
     let (code, _, err) = geltip(&[
         "render",
@@ -331,14 +350,15 @@ fn render_pose_and_scene() {
     assert_eq!(code, 0, "{err}");
     assert!(json(&out)["depth_mm"].as_f64().unwrap() > 0.0);
     assert!(std::fs::read(&a_png).unwrap() == std::fs::read(&b_png).unwrap());
+}
 
-    let scene = temp("scene.toml");
+/// A scene file of two contacts: one label per contact and the union mask.
+fn a_scene_labels_each_contact(scene: &Path, png: &Path) {
     std::fs::write(
-        &scene,
+        scene,
         "[[contacts]]\nobject = \"sphere\"\nat = \"rotation=30\"\ndepth = 1.0\n\n[[contacts]]\nobject = \"torus\"\nat = \"translation=8\"\nazimuth = 180\ndepth = 0.6\n",
     )
     .unwrap();
-    let png = temp("scene.png");
     let (code, out, err) = geltip(&[
         "render",
         "--sensor",
@@ -364,9 +384,12 @@ fn render_pose_and_scene() {
         union <= per[0] + per[1] && union >= per[0].max(per[1]) && per[1] > 1000,
         "{union} {per:?}"
     );
+}
 
+/// A contact without a depth, and a pose short of touching.
+fn bad_scenes_and_poses_are_one_line_errors(scene: &Path, png: &Path) {
     std::fs::write(
-        &scene,
+        scene,
         "[[contacts]]\nobject = \"sphere\"\nat = \"rotation=30\"\n",
     )
     .unwrap();
