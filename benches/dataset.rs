@@ -169,7 +169,7 @@ fn png_levels(sensor: &Sensor) -> anyhow::Result<()> {
         );
     }
     // What `geltip dataset` runs at the fast level: the empty finger's rows compressed once,
-    // each frame's changed rows now (the same compressed stream as fast's compressor).
+    // then only each frame's changed rows (the same compressed stream as fast's compressor).
     let reference = renderer.reference();
     let start = Instant::now();
     let rows = output::PngRowCache::new(reference.width, reference.height, &reference.rgba)?;

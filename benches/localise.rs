@@ -1,5 +1,5 @@
 //! Localiser speed: both detectors on rendered 640x480 paper-sensor images, in images/s:
-//! `cargo bench --bench localise`. Target (issue 11): >= 500 images/s for the surface
+//! `cargo bench --bench localise`. Target: >= 500 images/s for the surface
 //! detector on 2-core lavapipe hosts; the paper detector is measured beside it.
 
 use geltip::jobs::experiment::{self, Protocol};

@@ -247,9 +247,9 @@ fn labels_from_the_gpu_field_match_the_cpu_field() {
 }
 
 /// The footprint scan prunes blocks of cells with `contact::may_touch`: it must hold for every
-/// block that contains a point `contact::penetration` finds pressed (the old scan's sphere
-/// trace could step over a thin band within its tolerance; `may_touch` traces the grown
-/// object instead). Checked on points around several contacts, blocks of 2.2 mm.
+/// block that contains a point `contact::penetration` finds pressed (a sphere trace of the
+/// object itself can step over a thin band within its tolerance; `may_touch` traces the
+/// grown object, which cannot). Checked on points around several contacts, blocks of 2.2 mm.
 #[test]
 fn may_touch_covers_every_pressed_point_of_its_block() {
     let sensor = Sensor::preset("paper").unwrap();

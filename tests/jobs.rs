@@ -1,4 +1,4 @@
-//! The issue-11 jobs: preview numbers against hand computations, the stability sweep's
+//! The sensor-design jobs: preview numbers against hand computations, the stability sweep's
 //! invariants, and the tradeoff's Pareto front.
 
 mod common;
