@@ -2,6 +2,7 @@
 //! the module of what they run.
 
 pub mod dataset;
+pub mod evaluate;
 pub mod jobs;
 pub mod localise;
 pub mod progress;
@@ -60,6 +61,15 @@ pub enum Command {
     ///   geltip dataset --merge data/train data/s0 data/s1 data/s2 data/s3
     #[command(verbatim_doc_comment)]
     Dataset(dataset::DatasetArgs),
+    /// Score a contact detector against the exact labels: a predictions file, a program
+    /// reading frames on its stdin, or a built-in localiser, on a dataset or a suite.
+    ///
+    /// Examples:
+    ///   geltip evaluate --dataset data/test --predictions mine.jsonl --out eval/mine
+    ///   geltip evaluate --dataset data/test --detector "python3 detect.py" --out eval/mine
+    ///   geltip evaluate --suite paper --sensor paper --method surface --out eval/surface --compare eval/mine
+    #[command(verbatim_doc_comment)]
+    Evaluate(evaluate::EvaluateArgs),
     /// Preview sensor designs before building them: what the camera sees, the resolution
     /// down the finger, a picture per design, and a lens sweep.
     ///

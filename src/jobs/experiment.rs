@@ -4,11 +4,13 @@
 //! against the exact ground truth. Missed taps are counted, never averaged in.
 
 use crate::error::{GeltipError, Result};
-use crate::localise::{Localiser, Method};
+use crate::evaluate::{
+    self, Detector, MethodDetector, Options, Sample, Source, Suite, SuiteJob, SuitePart, Target,
+};
+use crate::localise::Method;
 use crate::object::{Object, Solid};
 use crate::output;
 use crate::plot;
-use crate::render::gpu::Renderer;
 use crate::render::{GroundTruth, Place, Press};
 use crate::sensor::Sensor;
 use glam::DVec3;
@@ -278,8 +280,25 @@ pub fn tap_name(object: Solid, position: usize) -> String {
     format!("{}_{slug}", object.name())
 }
 
-/// Renders every tap, localises it with every method and scores it. `out`, when given,
-/// receives the images and labels; `progress` is called after each tap.
+/// The paper's taps as a suite: one frame per tap, solid by solid, scored against each
+/// contact's centre.
+pub fn suite(sensor: &Sensor, protocol: &Protocol) -> Result<Suite> {
+    Ok(Suite {
+        name: "paper".into(),
+        parts: vec![SuitePart {
+            sensor: sensor.clone(),
+            target: Target::ContactCentre,
+            jobs: Solid::ALL
+                .iter()
+                .map(|&s| SuiteJob::Batch(taps(s, protocol)))
+                .collect(),
+        }],
+    })
+}
+
+/// Renders every tap, localises it with every method and scores it ([`crate::evaluate`],
+/// any distance matching). `out`, when given, receives the images and labels; `progress`
+/// is called after each tap.
 pub fn run(
     sensor: &Sensor,
     protocol: &Protocol,
@@ -289,50 +308,52 @@ pub fn run(
     if protocol.methods.is_empty() {
         return Err(GeltipError::input("experiment", "no methods to score"));
     }
-    let mut renderer = Renderer::new(sensor)?;
-    let localiser = Localiser::new(sensor);
-    // The frame detectors subtract: with sensor noise, a noisy one of its own.
-    let reference = renderer.render_empty()?.to_rgb();
-    if let Some(dir) = out {
-        output::write_png_rgb8(
-            dir.join("reference.png"),
-            reference.width(),
-            reference.height(),
-            reference.as_raw(),
-        )?;
-    }
+    let source = Source::Suite(suite(sensor, protocol)?);
+    let mut methods: Vec<MethodDetector> = protocol
+        .methods
+        .iter()
+        .map(|&m| MethodDetector::new(m))
+        .collect();
+    let mut detectors: Vec<&mut dyn Detector> =
+        methods.iter_mut().map(|d| d as &mut dyn Detector).collect();
+    // A tap is one contact: its detection is scored however far it lands, as the paper does.
+    let options = Options {
+        gate_mm: None,
+        work_dir: None,
+    };
+    let mut truths = Vec::new();
+    let evaluations = evaluate::evaluate(&source, &mut detectors, &options, |sample, _| {
+        let k = truths.len();
+        let (object, position) = (Solid::ALL[k / POSITIONS.len()], k % POSITIONS.len());
+        let truth = sample
+            .rendered
+            .as_ref()
+            .and_then(|t| t.first())
+            .cloned()
+            .ok_or_else(|| GeltipError::input("experiment", "a tap rendered no contact"))?;
+        let name = tap_name(object, position);
+        if let Some(dir) = out {
+            save_tap(dir, sample, &name, &truth)?;
+        }
+        truths.push(truth);
+        progress(&name);
+        Ok(())
+    })?;
     let mut results = Vec::new();
-    for object in Solid::ALL {
-        let rendered = renderer.render_batch(&taps(object, protocol))?;
-        for (position, (frame, truth)) in rendered.into_iter().enumerate() {
-            let image = frame.to_rgb();
-            let name = tap_name(object, position);
-            if let Some(dir) = out {
-                output::write_png_rgb8(
-                    dir.join("images").join(format!("{name}.png")),
-                    image.width(),
-                    image.height(),
-                    image.as_raw(),
-                )?;
-                output::write_json(
-                    dir.join("labels").join(format!("{name}.json")),
-                    &truth.to_json(),
-                )?;
-            }
-            for &method in &protocol.methods {
-                let d = localiser.localise(&reference, &image, method)?;
-                let prediction = if d.detected { d.point } else { None };
-                results.push(TapResult {
-                    object,
-                    position,
-                    method,
-                    error_mm: prediction.map(|p| (p - truth.scoring_point()).length()),
-                    prediction,
-                    confidence: d.confidence,
-                    truth: truth.clone(),
-                });
-            }
-            progress(&name);
+    for (k, truth) in truths.into_iter().enumerate() {
+        let (object, position) = (Solid::ALL[k / POSITIONS.len()], k % POSITIONS.len());
+        for (e, &method) in evaluations.iter().zip(&protocol.methods) {
+            let frame = &e.frames[k];
+            let hit = frame.score.matches.first();
+            results.push(TapResult {
+                object,
+                position,
+                method,
+                prediction: frame.found.first().and_then(|f| f.point),
+                confidence: frame.found.first().map_or(0.0, |f| f.confidence),
+                error_mm: hit.map(|m| m.error_mm),
+                truth: truth.clone(),
+            });
         }
     }
     let report = Report {
@@ -349,6 +370,26 @@ pub fn run(
         )?;
     }
     Ok(report)
+}
+
+/// Writes a tap's image and labels (and, with the first tap, the reference) into `dir`.
+fn save_tap(dir: &Path, sample: &Sample, name: &str, truth: &GroundTruth) -> Result<()> {
+    let reference = dir.join("reference.png");
+    if sample.truth.index == 0 {
+        let r = sample.reference.rgb(&sample.sensor)?;
+        output::write_png_rgb8(reference, r.width(), r.height(), r.as_raw())?;
+    }
+    let image = sample.image.rgb(&sample.sensor)?;
+    output::write_png_rgb8(
+        dir.join("images").join(format!("{name}.png")),
+        image.width(),
+        image.height(),
+        image.as_raw(),
+    )?;
+    output::write_json(
+        dir.join("labels").join(format!("{name}.json")),
+        &truth.to_json(),
+    )
 }
 
 /// One method's points on the chart: (position, mean, std) and the positions with misses.

@@ -4,6 +4,7 @@
 //! shows what a sensor design sees; [`stability`] sweeps contacts to find where the
 //! detectors fail; [`tradeoff`] measures the renderer's knobs for speed against accuracy.
 pub mod dataset;
+pub mod evaluate;
 pub mod experiment;
 pub mod preview;
 pub mod stability;

@@ -6,15 +6,19 @@
 //! empty noisy frames, and two simultaneous contacts.
 
 use crate::error::{GeltipError, Result};
-use crate::localise::{Localiser, Method};
+use crate::evaluate::{
+    self, Detector, Found, MethodDetector, Options, Scored, Source, Suite, SuiteJob, SuitePart,
+    Target,
+};
+use crate::localise::Method;
 use crate::object::{Object, Solid};
 use crate::output;
 use crate::plot;
-use crate::render::gpu::Renderer;
 use crate::render::{GroundTruth, Place, Press};
 use crate::sensor::Sensor;
 use crate::view;
-use image::RgbImage;
+
+pub use crate::evaluate::{region_of, REGIONS};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
@@ -55,23 +59,6 @@ impl Sweep {
     }
 }
 
-/// The part of the finger a contact is in, for "smallest depth detected 95%" per region.
-pub fn region_of(sensor: &Sensor, s: f64) -> &'static str {
-    let sj = sensor.finger.junction_s();
-    if s < 0.25 * sj {
-        "tip"
-    } else if s < sj - 0.5 {
-        "hemisphere"
-    } else if s <= sj + 2.0 {
-        "junction"
-    } else {
-        "side"
-    }
-}
-
-/// Region names in report order.
-pub const REGIONS: [&str; 4] = ["tip", "hemisphere", "junction", "side"];
-
 /// One localisation of one contact.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trial {
@@ -106,6 +93,10 @@ pub struct Report {
     /// of the two contacts).
     pub two_contacts: TwoContactTrials,
 }
+
+/// Per method: pairs, pairs where something was detected, mean distance (mm) to the
+/// nearer of the two contacts.
+type TwoContactTrials = Vec<(Method, usize, usize, Option<f64>)>;
 
 fn sphere(s: f64, azimuth_deg: f64, depth: f64) -> Press {
     let object = Arc::new(Object::Solid(Solid::Sphere));
@@ -151,25 +142,27 @@ pub fn positions(sensor: &Sensor, sweep: &Sweep) -> Result<Vec<(f64, f64)>> {
     Ok(out)
 }
 
-fn finite(d: &crate::localise::Detection) -> bool {
-    d.pixel.is_none_or(|p| p.is_finite())
-        && d.point.is_none_or(|p| p.is_finite())
-        && d.confidence.is_finite()
+/// Whether a detection holds only finite numbers.
+fn finite(f: &Found) -> bool {
+    f.pixel.is_none_or(|p| p.is_finite())
+        && f.point.is_none_or(|p| p.is_finite())
+        && f.confidence.is_finite()
 }
 
-/// Runs the sweep. `progress(done, total)` is called after each rendered batch.
-pub fn run(
-    sensor: &Sensor,
-    sweep: &Sweep,
-    out: Option<&Path>,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<Report> {
-    if sweep.methods.is_empty() {
-        return Err(GeltipError::input("--method", "no methods to test"));
-    }
-    let places = positions(sensor, sweep)?;
-    // Contacts the lens cannot see: well below the visible edge of each azimuth (when the
-    // finger goes on that far), at full depth.
+/// What a frame of the sweep's suite is for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Role {
+    /// A contact of the sweep (visible or not).
+    Contact { noisy: bool },
+    /// An empty frame, for false detections.
+    Empty { noisy: bool },
+    /// Two contacts at once.
+    Pair,
+}
+
+/// The sphere contacts the lens cannot see: well below the visible edge of each azimuth
+/// (when the finger goes on that far), at full depth.
+fn hidden_contacts(sensor: &Sensor, sweep: &Sweep) -> Vec<Press> {
     let mut hidden = Vec::new();
     for k in 0..sweep.azimuths {
         let az = 360.0 * k as f64 / sweep.azimuths as f64;
@@ -179,105 +172,233 @@ pub fn run(
             hidden.push(sphere(s, az, sensor.finger.shell_thickness));
         }
     }
-    let passes: Vec<bool> = if sweep.noise > 0.0 {
-        vec![false, true]
+    hidden
+}
+
+/// The sweep as a suite, with each frame's role: per pass (without noise, then with), the
+/// contacts (every depth at every place, then the hidden ones) in batches of 16, the empty
+/// frames, and (without noise) the pairs. Contacts are scored against the pressed point.
+fn plan(sensor: &Sensor, sweep: &Sweep) -> Result<(Suite, Vec<Role>)> {
+    if sweep.methods.is_empty() {
+        return Err(GeltipError::input("--method", "no methods to test"));
+    }
+    let places = positions(sensor, sweep)?;
+    let hidden = hidden_contacts(sensor, sweep);
+    let passes: &[bool] = if sweep.noise > 0.0 {
+        &[false, true]
     } else {
-        vec![false]
+        &[false]
     };
-    let total = passes.len() * (places.len() * sweep.depths.len() + hidden.len());
-    let mut done = 0;
-    let mut trials = Vec::new();
-    let mut non_finite = 0;
-    let mut false_detections = Vec::new();
-    let mut two_contacts = Vec::new();
-    for &noisy in &passes {
-        let mut config = sensor.config.clone();
-        config.render.noise = if noisy { sweep.noise } else { 0.0 };
-        let variant = Sensor::from_config(
-            if noisy {
-                format!("{} + noise {}", sensor.name, sweep.noise)
-            } else {
-                sensor.name.clone()
-            },
-            config,
-        )?;
-        let mut renderer = Renderer::new(&variant)?;
-        let localiser = Localiser::new(&variant);
-        let reference = renderer.render_empty()?.to_rgb();
-        let mut contacts: Vec<Press> = Vec::new();
-        for &depth in &sweep.depths {
-            for &(s, az) in &places {
-                contacts.push(sphere(s, az, depth));
-            }
-        }
-        contacts.extend(hidden.iter().cloned());
-        // Two simultaneous contacts: opposite azimuths at each visible arc length, at the
-        // sweep's deepest depth.
-        let pair_depth = sweep.depths.iter().cloned().fold(0.0, f64::max);
-        let mut pair_contacts: Vec<(Press, GroundTruth)> = Vec::new();
-        for chunk in contacts.chunks(16) {
-            let rendered = renderer.render_batch(chunk)?;
-            for ((frame, truth), contact) in rendered.into_iter().zip(chunk) {
-                // In the noisy pass this is settled from the noise-free pass below.
-                let image_changed = noisy || frame.rgba != renderer.reference().rgba;
-                let image = frame.to_rgb();
-                let visible = truth.pixel.is_ok();
-                for &method in &sweep.methods {
-                    let d = localiser.localise(&reference, &image, method)?;
-                    if !finite(&d) {
-                        non_finite += 1;
-                    }
-                    let error_mm = d
-                        .point
-                        .filter(|_| d.detected)
-                        .map(|p| (p - truth.point).length());
-                    trials.push(Trial {
-                        noisy,
-                        method,
-                        s: truth.s_mm,
-                        azimuth_deg: truth.azimuth_deg,
-                        depth: truth.depth_mm,
-                        region: region_of(sensor, truth.s_mm),
-                        visible,
-                        mask_pixels: truth.mask_pixels,
-                        image_changed,
-                        detected: d.detected,
-                        error_mm,
-                    });
-                }
-                if !noisy
-                    && (truth.depth_mm - pair_depth).abs() < 1e-9
-                    && visible
-                    && pair_contacts.len() < 2 * places.len()
-                {
-                    pair_contacts.push((contact.clone(), truth));
-                }
-            }
-            done += chunk.len();
-            progress(done, total);
-        }
-        // False detections on empty frames.
-        let mut empties = Vec::new();
-        for _ in 0..sweep.empty_frames {
-            empties.push(renderer.render_empty()?.to_rgb());
-        }
-        for &method in &sweep.methods {
-            let mut hits = 0;
-            for e in &empties {
-                let d = localiser.localise(&reference, e, method)?;
-                if !finite(&d) {
-                    non_finite += 1;
-                }
-                hits += d.detected as usize;
-            }
-            false_detections.push((noisy, method, hits, empties.len()));
-        }
-        if !noisy {
-            two_contacts =
-                two_contact_trials(&mut renderer, &localiser, &reference, &pair_contacts, sweep)?;
+    let mut contacts: Vec<Press> = Vec::new();
+    for &depth in &sweep.depths {
+        for &(s, az) in &places {
+            contacts.push(sphere(s, az, depth));
         }
     }
-    // The noisy pass's contacts leave a trace exactly when their noise-free twins do.
+    contacts.extend(hidden.iter().cloned());
+    let mut parts = Vec::new();
+    let mut roles = Vec::new();
+    for &noisy in passes {
+        let mut config = sensor.config.clone();
+        config.render.noise = if noisy { sweep.noise } else { 0.0 };
+        let name = if noisy {
+            format!("{} + noise {}", sensor.name, sweep.noise)
+        } else {
+            sensor.name.clone()
+        };
+        let variant = Sensor::from_config(name, config)?;
+        let mut jobs: Vec<SuiteJob> = contacts
+            .chunks(16)
+            .map(|c| SuiteJob::Batch(c.to_vec()))
+            .collect();
+        roles.extend(std::iter::repeat_n(Role::Contact { noisy }, contacts.len()));
+        jobs.extend(std::iter::repeat_n(SuiteJob::Empty, sweep.empty_frames));
+        roles.extend(std::iter::repeat_n(
+            Role::Empty { noisy },
+            sweep.empty_frames,
+        ));
+        if !noisy {
+            for pair in pairs(&variant, &contacts, &places, sweep)? {
+                jobs.push(SuiteJob::Scene(pair.to_vec()));
+                roles.push(Role::Pair);
+            }
+        }
+        parts.push(SuitePart {
+            sensor: variant,
+            target: Target::ContactPoint,
+            jobs,
+        });
+    }
+    let suite = Suite {
+        name: "stability".into(),
+        parts,
+    };
+    Ok((suite, roles))
+}
+
+/// The sweep as a suite of frames (see [`run`]).
+pub fn suite(sensor: &Sensor, sweep: &Sweep) -> Result<Suite> {
+    Ok(plan(sensor, sweep)?.0)
+}
+
+/// Pairs of the sweep's visible contacts at its deepest depth (same arc length, azimuths
+/// half a turn apart where the sweep has them, else consecutive ones), to render together.
+fn pairs(
+    sensor: &Sensor,
+    contacts: &[Press],
+    places: &[(f64, f64)],
+    sweep: &Sweep,
+) -> Result<Vec<[Press; 2]>> {
+    let pair_depth = sweep.depths.iter().cloned().fold(0.0, f64::max);
+    let mut chosen = Vec::new();
+    for c in contacts {
+        let pose = c.pose(sensor)?;
+        let visible = sensor.project(pose.point).is_ok();
+        if (pose.depth_mm - pair_depth).abs() < 1e-9 && visible && chosen.len() < 2 * places.len() {
+            chosen.push(c.clone());
+        }
+    }
+    let n = chosen.len();
+    let half = if sweep.azimuths >= 2 && n >= 2 {
+        n / 2
+    } else {
+        1
+    };
+    Ok((0..n.saturating_sub(half))
+        .map(|i| [chosen[i].clone(), chosen[i + half].clone()])
+        .collect())
+}
+
+/// Runs the sweep through [`crate::evaluate`] (any distance matching: one contact, one
+/// answer). `progress(done, total)` is called after each frame.
+pub fn run(
+    sensor: &Sensor,
+    sweep: &Sweep,
+    out: Option<&Path>,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Report> {
+    let (suite, roles) = plan(sensor, sweep)?;
+    let total = roles.len();
+    let source = Source::Suite(suite);
+    let mut methods: Vec<MethodDetector> = sweep
+        .methods
+        .iter()
+        .map(|&m| MethodDetector::new(m))
+        .collect();
+    let mut detectors: Vec<&mut dyn Detector> =
+        methods.iter_mut().map(|d| d as &mut dyn Detector).collect();
+    let options = Options {
+        gate_mm: None,
+        work_dir: None,
+    };
+    let mut frames: Vec<(Option<GroundTruth>, bool)> = Vec::with_capacity(total);
+    let evaluations = evaluate::evaluate(&source, &mut detectors, &options, |sample, _| {
+        let truth = sample.rendered.as_ref().and_then(|t| t.first()).cloned();
+        // In the noisy pass this is settled from the noise-free twin below.
+        let changed = sample.image.rgb(&sample.sensor)? != sample.reference.rgb(&sample.sensor)?;
+        frames.push((truth, changed));
+        progress(frames.len(), total);
+        Ok(())
+    })?;
+    let mut report = Report {
+        sensor: sensor.name.clone(),
+        sweep: sweep.clone(),
+        trials: Vec::new(),
+        non_finite: 0,
+        false_detections: Vec::new(),
+        two_contacts: Vec::new(),
+    };
+    report.non_finite = evaluations
+        .iter()
+        .flat_map(|e| e.frames.iter().flat_map(|f| f.found.iter()))
+        .filter(|f| !finite(f))
+        .count();
+    for (k, role) in roles.iter().enumerate() {
+        if let (Role::Contact { noisy }, (Some(truth), changed)) = (role, &frames[k]) {
+            for (e, &method) in evaluations.iter().zip(&sweep.methods) {
+                report
+                    .trials
+                    .push(trial(sensor, *noisy, method, truth, *changed, &e.frames[k]));
+            }
+        }
+    }
+    settle_noisy_traces(&mut report.trials);
+    for &noisy in &[false, true] {
+        for (e, &method) in evaluations.iter().zip(&sweep.methods) {
+            let empties: Vec<&Scored> = roles
+                .iter()
+                .zip(&e.frames)
+                .filter(|(r, _)| **r == Role::Empty { noisy })
+                .map(|(_, f)| f)
+                .collect();
+            if noisy && !roles.contains(&Role::Contact { noisy: true }) {
+                continue;
+            }
+            let hits = empties.iter().filter(|f| !f.found.is_empty()).count();
+            report
+                .false_detections
+                .push((noisy, method, hits, empties.len()));
+        }
+    }
+    for (e, &method) in evaluations.iter().zip(&sweep.methods) {
+        let pairs: Vec<&Scored> = roles
+            .iter()
+            .zip(&e.frames)
+            .filter(|(r, _)| **r == Role::Pair)
+            .map(|(_, f)| f)
+            .collect();
+        let errors: Vec<f64> = pairs
+            .iter()
+            .filter_map(|f| f.score.matches.first().map(|m| m.error_mm))
+            .collect();
+        let mean = (!errors.is_empty()).then(|| errors.iter().sum::<f64>() / errors.len() as f64);
+        report
+            .two_contacts
+            .push((method, pairs.len(), errors.len(), mean));
+    }
+    report.check(sensor)?;
+    if let Some(dir) = out {
+        report.write(dir, sensor)?;
+    }
+    Ok(report)
+}
+
+/// One contact's trial for one method.
+fn trial(
+    sensor: &Sensor,
+    noisy: bool,
+    method: Method,
+    truth: &GroundTruth,
+    image_changed: bool,
+    frame: &Scored,
+) -> Trial {
+    let first = frame.found.first();
+    // A contact the lens cannot see is never matched; its trial still says how far off a
+    // detection of it landed.
+    let error_mm = match frame.score.matches.first() {
+        Some(m) => Some(m.error_mm),
+        None => first
+            .filter(|_| !frame.truth.contacts.first().is_some_and(|c| c.visible))
+            .and_then(|f| f.point)
+            .map(|p| (p - truth.point).length()),
+    };
+    Trial {
+        noisy,
+        method,
+        s: truth.s_mm,
+        azimuth_deg: truth.azimuth_deg,
+        depth: truth.depth_mm,
+        region: region_of(sensor, truth.s_mm),
+        visible: truth.pixel.is_ok(),
+        mask_pixels: truth.mask_pixels,
+        image_changed,
+        detected: first.is_some(),
+        error_mm,
+    }
+}
+
+/// The noisy pass's contacts leave a trace exactly when their noise-free twins do.
+fn settle_noisy_traces(trials: &mut [Trial]) {
     let clean: Vec<(f64, f64, f64, bool)> = trials
         .iter()
         .filter(|t| !t.noisy)
@@ -291,96 +412,51 @@ pub fn run(
             t.image_changed = c.3;
         }
     }
-    if non_finite > 0 {
-        return Err(GeltipError::input(
-            format!("stability sweep on '{}'", sensor.name),
-            format!("{non_finite} detections held NaN or infinite numbers"),
-        ));
-    }
-    // A contact of which nothing reaches the image must never be localised.
-    if let Some(t) = trials
-        .iter()
-        .find(|t| !t.visible && !t.image_changed && t.detected)
-    {
-        return Err(GeltipError::input(
-            format!("stability sweep on '{}'", sensor.name),
-            format!(
-                "the {} detector placed a contact the lens cannot see (s {:.2} mm, azimuth {}°)",
-                t.method, t.s, t.azimuth_deg
-            ),
-        ));
-    }
-    let report = Report {
-        sensor: sensor.name.clone(),
-        sweep: sweep.clone(),
-        trials,
-        non_finite,
-        false_detections,
-        two_contacts,
-    };
-    if let Some(dir) = out {
-        output::write_atomic(dir.join("stability.md"), report.markdown().as_bytes())?;
-        output::write_atomic(dir.join("stability.csv"), report.csv().as_bytes())?;
-        output::write_atomic(
-            dir.join("detection_rate.svg"),
-            report.rate_chart()?.as_bytes(),
-        )?;
-        output::write_atomic(
-            dir.join("error_map.svg"),
-            report.error_map(sensor)?.as_bytes(),
-        )?;
-    }
-    Ok(report)
-}
-
-/// Per method: pairs, pairs where something was detected, mean distance (mm) to the
-/// nearer of the two contacts.
-type TwoContactTrials = Vec<(Method, usize, usize, Option<f64>)>;
-
-/// Pairs of the sweep's contacts (same arc length, azimuths half a turn apart where the
-/// sweep has them, else consecutive ones) rendered together as one scene.
-fn two_contact_trials(
-    renderer: &mut Renderer,
-    localiser: &Localiser,
-    reference: &RgbImage,
-    contacts: &[(Press, GroundTruth)],
-    sweep: &Sweep,
-) -> Result<TwoContactTrials> {
-    let n = contacts.len();
-    let half = if sweep.azimuths >= 2 && n >= 2 {
-        n / 2
-    } else {
-        1
-    };
-    let mut scenes = Vec::new();
-    for i in 0..n.saturating_sub(half) {
-        let (a, ta) = &contacts[i];
-        let (b, tb) = &contacts[i + half];
-        let (frame, _) = renderer.render_scene(&[a.clone(), b.clone()])?;
-        scenes.push((frame.to_rgb(), ta, tb));
-    }
-    let mut out = Vec::new();
-    for &method in &sweep.methods {
-        let (mut pairs, mut found, mut sum) = (0, 0, 0.0);
-        for (image, ta, tb) in &scenes {
-            let d = localiser.localise(reference, image, method)?;
-            pairs += 1;
-            if let (true, Some(p)) = (d.detected, d.point) {
-                found += 1;
-                sum += (p - ta.point).length().min((p - tb.point).length());
-            }
-        }
-        out.push((
-            method,
-            pairs,
-            found,
-            (found > 0).then(|| sum / found as f64),
-        ));
-    }
-    Ok(out)
 }
 
 impl Report {
+    /// Refuses a sweep whose detections held NaN or infinity, or that localised a contact
+    /// of which nothing reaches the image.
+    fn check(&self, sensor: &Sensor) -> Result<()> {
+        if self.non_finite > 0 {
+            return Err(GeltipError::input(
+                format!("stability sweep on '{}'", sensor.name),
+                format!(
+                    "{} detections held NaN or infinite numbers",
+                    self.non_finite
+                ),
+            ));
+        }
+        if let Some(t) = self
+            .trials
+            .iter()
+            .find(|t| !t.visible && !t.image_changed && t.detected)
+        {
+            return Err(GeltipError::input(
+                format!("stability sweep on '{}'", sensor.name),
+                format!(
+                    "the {} detector placed a contact the lens cannot see (s {:.2} mm, azimuth {}°)",
+                    t.method, t.s, t.azimuth_deg
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Writes the tables, the CSV and the charts into `dir`.
+    fn write(&self, dir: &Path, sensor: &Sensor) -> Result<()> {
+        output::write_atomic(dir.join("stability.md"), self.markdown().as_bytes())?;
+        output::write_atomic(dir.join("stability.csv"), self.csv().as_bytes())?;
+        output::write_atomic(
+            dir.join("detection_rate.svg"),
+            self.rate_chart()?.as_bytes(),
+        )?;
+        output::write_atomic(
+            dir.join("error_map.svg"),
+            self.error_map(sensor)?.as_bytes(),
+        )
+    }
+
     fn visible_trials(&self, noisy: bool, method: Method) -> impl Iterator<Item = &Trial> {
         self.trials
             .iter()

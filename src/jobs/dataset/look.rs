@@ -59,23 +59,42 @@ impl Look {
         let gains: [f64; 3] =
             std::array::from_fn(|_| 1.0 + self.light_jitter * (2.0 * rng.unit() - 1.0));
         let contrast = 1.0 + self.paint_jitter * (2.0 * rng.unit() - 1.0);
-        let mut noise = SampleRng::new(&[seed, k, STREAM_NOISE]);
+        let noise = SampleRng::new(&[seed, k, STREAM_NOISE]);
+        let change = frame
+            .rgba
+            .chunks_exact(4)
+            .flat_map(|px| [px[0], px[1], px[2]]);
+        self.compose(change, gains, contrast, noise)
+    }
+
+    /// The set's empty frame: the base with the set's noise (drawn from its own stream, as
+    /// no sample's), without jitter.
+    pub(super) fn reference(&self, seed: u64) -> Vec<u8> {
+        let noise = SampleRng::new(&[seed, u64::MAX, STREAM_NOISE]);
+        self.compose(self.reference.iter().copied(), [1.0; 3], 1.0, noise)
+    }
+
+    /// The base plus `contrast` times the change of `rendered` (RGB values) from the empty
+    /// finger, times each channel's gain, plus noise.
+    fn compose(
+        &self,
+        rendered: impl Iterator<Item = u8>,
+        gains: [f64; 3],
+        contrast: f64,
+        mut noise: SampleRng,
+    ) -> Vec<u8> {
         // Approximately Gaussian: the sum of four 16-bit uniforms, scaled to unit variance.
         let scale = self.noise * 3.0_f64.sqrt() / 65536.0;
         let mut out = Vec::with_capacity(self.base.len());
-        for (i, px) in frame.rgba.chunks_exact(4).enumerate() {
-            for c in 0..3 {
-                let j = 3 * i + c;
-                let change = px[c] as f64 - self.reference[j] as f64;
-                let mut v = (self.base[j] as f64 + contrast * change) * gains[c];
-                if self.noise > 0.0 {
-                    let r = noise.next_u64();
-                    let sum =
-                        (r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48);
-                    v += (sum as f64 - 2.0 * 65535.0) * scale;
-                }
-                out.push(v.round().clamp(0.0, 255.0) as u8);
+        for (j, value) in rendered.enumerate() {
+            let change = value as f64 - self.reference[j] as f64;
+            let mut v = (self.base[j] as f64 + contrast * change) * gains[j % 3];
+            if self.noise > 0.0 {
+                let r = noise.next_u64();
+                let sum = (r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48);
+                v += (sum as f64 - 2.0 * 65535.0) * scale;
             }
+            out.push(v.round().clamp(0.0, 255.0) as u8);
         }
         out
     }

@@ -30,11 +30,13 @@
 mod encode;
 pub mod look;
 mod pipeline;
+mod reference;
 pub mod sampling;
 pub mod spec;
 pub mod store;
 
 pub use look::fnv1a64;
+pub use reference::{reference_of_set, REFERENCE};
 pub use sampling::{
     load_objects, make_contact, sample_contact, visible_arc_length, SampleRng, MAX_ATTEMPTS,
 };

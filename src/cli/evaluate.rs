@@ -1,0 +1,99 @@
+//! `geltip evaluate`: score a detector (a predictions file, a program, or a built-in
+//! localiser) on a dataset or a suite, and write the report.
+
+use super::progress;
+use anyhow::{bail, Result};
+use clap::{ArgGroup, Args};
+use geltip::evaluate::{CommandDetector, Detector, MethodDetector, Named, Predictions};
+use geltip::jobs::evaluate::{self, SUITES};
+use geltip::localise::Method;
+use geltip::sensor::Sensor;
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Args)]
+#[command(group(ArgGroup::new("frames").required(true).args(["dataset", "suite"])))]
+#[command(group(ArgGroup::new("detector_kind").required(true).args(["predictions", "detector", "method"])))]
+pub struct EvaluateArgs {
+    /// A set written by `geltip dataset` (its sensor, labels and images).
+    #[arg(long)]
+    dataset: Option<PathBuf>,
+    /// A suite rendered on the fly: `paper` (the paper's 7 solids x 8 taps) or `stability`
+    /// (the stability sweep, with noise, hidden contacts, empty frames and pairs).
+    #[arg(long, value_parser = SUITES, requires = "sensor")]
+    suite: Option<String>,
+    /// The sensor a suite is rendered for: a preset or a TOML file.
+    #[arg(long, conflicts_with = "dataset")]
+    sensor: Option<String>,
+    /// Detections written beforehand: JSON lines {"sample": k, "detections": [{"pixel":
+    /// [u, v] | "point": [x, y, z], "confidence": c}, ...]}, one per frame.
+    #[arg(long)]
+    predictions: Option<PathBuf>,
+    /// A detector program (run with sh -c): reads one JSON line per frame on stdin
+    /// ({"sample", "image", "reference", "sensor"}: paths), answers one line
+    /// {"detections": [...]} on stdout.
+    #[arg(long)]
+    detector: Option<String>,
+    /// A built-in localiser: surface or paper.
+    #[arg(long)]
+    method: Option<String>,
+    /// Directory for summary.json, per_sample.jsonl, tables.md and the charts.
+    #[arg(long)]
+    out: PathBuf,
+    /// A detection matches a contact no farther than this on the finger, mm.
+    #[arg(long, default_value_t = geltip::evaluate::DEFAULT_GATE_MM)]
+    gate_mm: f64,
+    /// Seconds the detector program may take over one frame.
+    #[arg(long, default_value_t = 60.0)]
+    timeout_s: f64,
+    /// Another run's output directory, to set the two detectors side by side.
+    #[arg(long)]
+    compare: Option<PathBuf>,
+    /// What the report calls the detector (default: the file, the command or the method).
+    #[arg(long)]
+    name: Option<String>,
+}
+
+/// Scores the detector, writes the report and prints its tables.
+pub fn evaluate(args: EvaluateArgs) -> Result<()> {
+    if !(args.timeout_s.is_finite() && args.timeout_s > 0.0) {
+        bail!(
+            "--timeout-s: must be a positive number of seconds, got {}",
+            args.timeout_s
+        );
+    }
+    let sensor = args.sensor.as_deref().map(Sensor::load).transpose()?;
+    let source = evaluate::source(
+        args.dataset.as_deref(),
+        args.suite.as_deref(),
+        sensor.as_ref(),
+    )?;
+    let detector: Box<dyn Detector> = match (&args.predictions, &args.detector, &args.method) {
+        (Some(path), _, _) => Box::new(Predictions::read(path, source.sensor())?),
+        (_, Some(command), _) => Box::new(CommandDetector::start(
+            command,
+            Duration::from_secs_f64(args.timeout_s),
+        )?),
+        (_, _, Some(method)) => Box::new(MethodDetector::new(
+            Method::from_name(method).map_err(|e| anyhow::anyhow!("--{e}"))?,
+        )),
+        _ => bail!("name a detector: --predictions, --detector or --method"),
+    };
+    let mut detector = Named::new(detector, args.name);
+    let bar = progress::bar_or_lines("frames")?;
+    let outcome = evaluate::run(
+        &source,
+        &mut detector,
+        Some(args.gate_mm),
+        Some(&args.out),
+        args.compare.as_deref(),
+        |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    )?;
+    bar.finish_and_clear();
+    println!("{}", outcome.tables);
+    println!("Wrote {}: {}", args.out.display(), outcome.files.join(", "));
+    Ok(())
+}

@@ -1,0 +1,260 @@
+//! An evaluation's charts: recall and error by group (depth, region), the failure map on the
+//! unrolled finger and the precision-recall curves. Each compared detector is a series.
+
+use super::report::group_names;
+use super::Evaluation;
+use crate::error::Result;
+use crate::plot;
+use crate::sensor::Sensor;
+use crate::view;
+use plotters::prelude::*;
+use serde_json::Value;
+
+/// A detection this far (mm) or farther from its contact is drawn as a large error.
+const LARGE_ERROR_MM: f64 = 1.0;
+
+/// Two panels over the groups of `key` (`by_depth`, `by_region`): the share of visible
+/// contacts found, and the mean error with a whisker to the 95th percentile.
+pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<String> {
+    let groups = group_names(summaries, key, order);
+    let n = groups.len().max(1);
+    let what = key.trim_start_matches("by_").replace('_', " ");
+    let value = |s: &Value, g: &str, path: &[&str]| -> Option<f64> {
+        let mut v = &s[key][g];
+        for p in path {
+            v = &v[*p];
+        }
+        v.as_f64()
+    };
+    let top_error = summaries
+        .iter()
+        .flat_map(|s| {
+            groups
+                .iter()
+                .filter_map(|g| value(s, g, &["error_mm", "p95"]))
+        })
+        .fold(0.5f64, f64::max)
+        * 1.1;
+    let label = |x: &f64| {
+        let i = x.round();
+        match groups.get(i as usize) {
+            Some(g) if (x - i).abs() < 1e-6 && i >= 0.0 => g.clone(),
+            _ => String::new(),
+        }
+    };
+    plot::svg(&format!("by {what}"), (1000, 420), |root| {
+        let (left, right) = root.split_horizontally(500);
+        let x_range = -0.5f64..(n as f64 - 0.5);
+        let mut recall = ChartBuilder::on(&left)
+            .caption(format!("Contacts found, by {what}"), ("sans-serif", 17))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(x_range.clone(), 0f64..105f64)?;
+        recall
+            .configure_mesh()
+            .x_labels(n)
+            .x_label_formatter(&label)
+            .x_desc(what.clone())
+            .y_desc("found (%)")
+            .draw()?;
+        let mut error = ChartBuilder::on(&right)
+            .caption(
+                format!("Error by {what} (mean, whisker to p95)"),
+                ("sans-serif", 17),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(x_range, 0f64..top_error)?;
+        error
+            .configure_mesh()
+            .x_labels(n)
+            .x_label_formatter(&label)
+            .x_desc(what.clone())
+            .y_desc("error (mm)")
+            .draw()?;
+        let count = summaries.len() as f64;
+        for (k, s) in summaries.iter().enumerate() {
+            let c = plot::colour(k);
+            let dx = (k as f64 - (count - 1.0) / 2.0) * 0.15;
+            let name = s["detector"].as_str().unwrap_or("?").to_string();
+            let rates: Vec<(f64, f64)> = groups
+                .iter()
+                .enumerate()
+                .filter_map(|(i, g)| Some((i as f64 + dx, 100.0 * value(s, g, &["recall"])?)))
+                .collect();
+            recall
+                .draw_series(LineSeries::new(rates.clone(), c.stroke_width(2)))?
+                .label(name.clone())
+                .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
+            recall.draw_series(rates.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
+            error.draw_series(groups.iter().enumerate().filter_map(|(i, g)| {
+                let mean = value(s, g, &["error_mm", "mean"])?;
+                let p95 = value(s, g, &["error_mm", "p95"]).unwrap_or(mean);
+                Some(ErrorBar::new_vertical(
+                    i as f64 + dx,
+                    mean,
+                    mean,
+                    p95,
+                    c.filled(),
+                    8,
+                ))
+            }))?;
+        }
+        recall
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.9))
+            .position(SeriesLabelPosition::LowerLeft)
+            .draw()?;
+        Ok(())
+    })
+}
+
+/// The unrolled finger (azimuth across, arc length from the tip down): each visible contact
+/// where it is, green when found well, orange when found with an error of 1 mm or more, a
+/// red cross when missed; false positives as grey pluses where they were placed.
+pub fn failure_map(eval: &Evaluation, sensor: &Sensor) -> Result<String> {
+    let s_top = view::finger_length(sensor);
+    let finger = &sensor.finger;
+    let mut good = Vec::new();
+    let mut large = Vec::new();
+    let mut missed = Vec::new();
+    let mut false_positives = Vec::new();
+    for f in &eval.frames {
+        for (i, c) in f.truth.contacts.iter().enumerate() {
+            if !c.visible {
+                continue;
+            }
+            let at = (c.azimuth_deg.rem_euclid(360.0), c.s_mm);
+            match f.score.matches.iter().find(|m| m.contact == i) {
+                Some(m) if m.error_mm >= LARGE_ERROR_MM => large.push(at),
+                Some(_) => good.push(at),
+                None => missed.push(at),
+            }
+        }
+        for &j in &f.score.false_positives {
+            if let Some(p) = f.found[j].point {
+                let sc = finger.coord_of(p);
+                false_positives.push((sc.phi.to_degrees().rem_euclid(360.0), sc.s.min(s_top)));
+            }
+        }
+    }
+    let title = format!(
+        "{}: where contacts were missed (×) or found 1 mm or more off (orange)",
+        eval.detector
+    );
+    plot::svg("failure map", (760, 560), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 15))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0f64..360f64, s_top..0f64)?;
+        chart
+            .configure_mesh()
+            .x_desc("azimuth (°)")
+            .y_desc("arc length from the tip (mm)")
+            .draw()?;
+        let sj = finger.junction_s();
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(0.0, sj), (360.0, sj)],
+            plot::REFERENCE_GREY,
+        )))?;
+        let edge: Vec<(f64, f64)> = (0..=72)
+            .map(|k| {
+                let az = 5.0 * k as f64;
+                (az, view::visible_extent(sensor, az.to_radians()))
+            })
+            .collect();
+        chart
+            .draw_series(LineSeries::new(edge, BLACK.stroke_width(1)))?
+            .label("lens edge")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK));
+        let green = RGBColor(44, 160, 44);
+        let orange = RGBColor(255, 127, 14);
+        let red = RGBColor(214, 39, 40);
+        chart
+            .draw_series(good.iter().map(|&p| Circle::new(p, 2, green.filled())))?
+            .label(format!("found ({})", good.len()))
+            .legend(move |(x, y)| Circle::new((x, y), 3, green.filled()));
+        chart
+            .draw_series(large.iter().map(|&p| Circle::new(p, 4, orange.filled())))?
+            .label(format!(
+                "found, ≥ {LARGE_ERROR_MM} mm off ({})",
+                large.len()
+            ))
+            .legend(move |(x, y)| Circle::new((x, y), 4, orange.filled()));
+        chart
+            .draw_series(
+                missed
+                    .iter()
+                    .map(|&p| Cross::new(p, 4, red.stroke_width(2))),
+            )?
+            .label(format!("missed ({})", missed.len()))
+            .legend(move |(x, y)| Cross::new((x, y), 4, red.stroke_width(2)));
+        chart
+            .draw_series(false_positives.iter().map(|&(x, y)| {
+                PathElement::new(vec![(x - 2.0, y), (x + 2.0, y)], plot::REFERENCE_GREY)
+            }))?
+            .label(format!("false positives ({})", false_positives.len()))
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 10, y)], plot::REFERENCE_GREY));
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.9))
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()?;
+        Ok(())
+    })
+}
+
+/// Precision against recall over the confidence thresholds, a curve per detector.
+pub fn precision_recall(summaries: &[Value]) -> Result<String> {
+    plot::svg("precision-recall", (560, 460), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                "Precision against recall (confidence thresholds)",
+                ("sans-serif", 17),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0f64..1.02f64, 0f64..1.02f64)?;
+        chart
+            .configure_mesh()
+            .x_desc("recall")
+            .y_desc("precision")
+            .draw()?;
+        for (k, s) in summaries.iter().enumerate() {
+            let c = plot::colour(k);
+            let points: Vec<(f64, f64)> = s["precision_recall"]
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .filter_map(|p| Some((p[2].as_f64()?, p[1].as_f64()?)))
+                        .collect()
+                })
+                .unwrap_or_default();
+            let ap = s["average_precision"]
+                .as_f64()
+                .map(|a| format!(" (AP {a:.3})"))
+                .unwrap_or_default();
+            chart
+                .draw_series(LineSeries::new(points.clone(), c.stroke_width(2)))?
+                .label(format!("{}{ap}", s["detector"].as_str().unwrap_or("?")))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2))
+                });
+            chart.draw_series(points.iter().map(|&p| Circle::new(p, 2, c.filled())))?;
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.9))
+            .position(SeriesLabelPosition::LowerLeft)
+            .draw()?;
+        Ok(())
+    })
+}

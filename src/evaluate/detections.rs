@@ -1,0 +1,249 @@
+//! What a detector reports for a frame: a list of detections, each a pixel or a point on the
+//! finger with a confidence, as JSON (`{"pixel": [u, v], "confidence": c}` or
+//! `{"point": [x, y, z], ...}`) or from a built-in localiser.
+
+use super::truth::pixel_of;
+use crate::error::{GeltipError, Result};
+use crate::localise::Detection;
+use crate::sensor::Sensor;
+use glam::{DVec2, DVec3};
+use serde_json::Value;
+
+/// One detection, placed on the finger.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Found {
+    /// The detected contact on the finger (mm, camera frame): given, or the given pixel's
+    /// surface point through the sensor's map m. `None`: the pixel sees no part of the
+    /// finger, so the detection cannot match a contact.
+    pub point: Option<DVec3>,
+    /// The detection's pixel: given, or the pixel that sees the given point.
+    pub pixel: Option<DVec2>,
+    /// Larger is surer; only the order matters (precision-recall thresholds).
+    pub confidence: f64,
+}
+
+impl Found {
+    /// A detection at a pixel, placed on the finger by the map m.
+    pub fn at_pixel(sensor: &Sensor, pixel: DVec2, confidence: f64) -> Found {
+        Found {
+            point: sensor.unproject(pixel).map(|sp| sp.point),
+            pixel: Some(pixel),
+            confidence,
+        }
+    }
+
+    /// A detection at a point: its pixel is the one whose lens ray points at it.
+    pub fn at_point(sensor: &Sensor, point: DVec3, confidence: f64) -> Found {
+        let pixel = sensor
+            .finger
+            .surface_along(point.normalize_or_zero())
+            .and_then(|sp| sensor.project(sp.point).ok());
+        Found {
+            point: Some(point),
+            pixel,
+            confidence,
+        }
+    }
+
+    /// A built-in localiser's result: one detection, or none.
+    pub fn from_detection(d: &Detection) -> Vec<Found> {
+        match (d.detected, d.point) {
+            (true, Some(point)) => vec![Found {
+                point: Some(point),
+                pixel: d.pixel,
+                confidence: d.confidence,
+            }],
+            _ => Vec::new(),
+        }
+    }
+
+    /// A detection's JSON object; `what` names it in errors.
+    pub fn from_json(sensor: &Sensor, v: &Value, what: &str) -> Result<Found> {
+        let Value::Object(fields) = v else {
+            return Err(GeltipError::input(what, "expected an object"));
+        };
+        let confidence = match fields.get("confidence") {
+            None => 1.0,
+            Some(c) => c.as_f64().filter(|c| c.is_finite()).ok_or_else(|| {
+                GeltipError::input(
+                    what,
+                    format!("confidence: expected a finite number, got {c}"),
+                )
+            })?,
+        };
+        if let Some(p) = fields.get("point") {
+            let xyz = p
+                .as_array()
+                .filter(|a| a.len() == 3)
+                .map(|a| a.iter().filter_map(Value::as_f64).collect::<Vec<_>>())
+                .filter(|a| a.len() == 3 && a.iter().all(|x| x.is_finite()))
+                .ok_or_else(|| {
+                    GeltipError::input(what, format!("point: expected [x, y, z] in mm, got {p}"))
+                })?;
+            let point = DVec3::new(xyz[0], xyz[1], xyz[2]);
+            let mut found = Found::at_point(sensor, point, confidence);
+            if let Some(px) = fields.get("pixel") {
+                found.pixel = Some(checked_pixel(sensor, px, what)?);
+            }
+            return Ok(found);
+        }
+        match fields.get("pixel") {
+            Some(px) => Ok(Found::at_pixel(
+                sensor,
+                checked_pixel(sensor, px, what)?,
+                confidence,
+            )),
+            None => Err(GeltipError::input(
+                what,
+                "needs \"pixel\": [u, v] or \"point\": [x, y, z]",
+            )),
+        }
+    }
+}
+
+/// A pixel on the sensor's image.
+fn checked_pixel(sensor: &Sensor, v: &Value, what: &str) -> Result<DVec2> {
+    let pixel = pixel_of(v).ok_or_else(|| {
+        GeltipError::input(
+            what,
+            format!("pixel: expected [u, v] (finite numbers), got {v}"),
+        )
+    })?;
+    if !sensor.in_image(pixel) {
+        return Err(GeltipError::input(
+            what,
+            format!(
+                "pixel: ({}, {}) is outside the {}x{} image",
+                pixel.x, pixel.y, sensor.width, sensor.height
+            ),
+        ));
+    }
+    Ok(pixel)
+}
+
+/// A detections list: `[{...}, ...]`.
+pub fn detections_from_json(sensor: &Sensor, v: &Value, what: &str) -> Result<Vec<Found>> {
+    let Value::Array(list) = v else {
+        return Err(GeltipError::input(
+            what,
+            format!("detections: expected a list, got {}", kind(v)),
+        ));
+    };
+    list.iter()
+        .enumerate()
+        .map(|(j, d)| Found::from_json(sensor, d, &format!("{what}: detections[{j}]")))
+        .collect()
+}
+
+/// A JSON value's kind, for errors.
+pub(super) fn kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "a list",
+        Value::Object(_) => "an object",
+    }
+}
+
+/// One line of a predictions file or a detector's answer, parsed: the sample it names (if
+/// it names one) and its detections. `what` names the line in errors.
+pub fn parse_line(sensor: &Sensor, line: &str, what: &str) -> Result<(Option<u64>, Vec<Found>)> {
+    let v: Value = serde_json::from_str(line)
+        .map_err(|e| GeltipError::input(what, format!("not valid JSON: {e}")))?;
+    let Value::Object(fields) = &v else {
+        return Err(GeltipError::input(
+            what,
+            format!("expected a JSON object, got {}", kind(&v)),
+        ));
+    };
+    let sample = match fields.get("sample") {
+        None => None,
+        Some(s) => Some(s.as_u64().ok_or_else(|| {
+            GeltipError::input(
+                what,
+                format!("sample: expected the sample's index (an integer >= 0), got {s}"),
+            )
+        })?),
+    };
+    let list = fields
+        .get("detections")
+        .ok_or_else(|| GeltipError::input(what, "detections: required (a list, maybe empty)"))?;
+    Ok((sample, detections_from_json(sensor, list, what)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper() -> Sensor {
+        Sensor::preset("paper").unwrap()
+    }
+
+    #[test]
+    fn a_pixel_goes_through_the_map_and_a_point_back_to_its_pixel() {
+        let s = paper();
+        let (k, found) = parse_line(
+            &s,
+            r#"{"sample": 4, "detections": [{"pixel": [400, 240], "confidence": 0.5}, {"point": [7.5, 0, 15.748976162659282]}]}"#,
+            "line 1",
+        )
+        .unwrap();
+        assert_eq!(k, Some(4));
+        assert!(
+            (found[0].point.unwrap() - DVec3::new(7.5, 0.0, 15.748976162659282)).length() < 1e-9
+        );
+        assert_eq!(found[0].confidence, 0.5);
+        assert!((found[1].pixel.unwrap() - DVec2::new(400.0, 240.0)).length() < 1e-6);
+        assert_eq!(found[1].confidence, 1.0);
+        // A pixel in the image's dark corner sees no part of the finger.
+        let (_, corner) = parse_line(&s, r#"{"detections": [{"pixel": [1, 1]}]}"#, "l").unwrap();
+        assert_eq!(corner[0].point, None);
+    }
+
+    #[test]
+    fn bad_lines_name_the_line_and_the_field() {
+        let s = paper();
+        for (line, says) in [
+            ("{", "line 7: not valid JSON"),
+            ("[1]", "line 7: expected a JSON object, got a list"),
+            (r#"{"sample": -1, "detections": []}"#, "line 7: sample:"),
+            (r#"{"sample": 1.5, "detections": []}"#, "line 7: sample:"),
+            (r#"{"sample": 1}"#, "line 7: detections: required"),
+            (
+                r#"{"detections": {}}"#,
+                "line 7: detections: expected a list",
+            ),
+            (r#"{"detections": [{}]}"#, "line 7: detections[0]: needs"),
+            (
+                r#"{"detections": [{"pixel": [700, 10]}]}"#,
+                "line 7: detections[0]: pixel: (700, 10) is outside",
+            ),
+            (
+                r#"{"detections": [{"pixel": [1, "a"]}]}"#,
+                "line 7: detections[0]: pixel: expected",
+            ),
+            (
+                r#"{"detections": [{"point": [1, 2]}]}"#,
+                "line 7: detections[0]: point: expected",
+            ),
+            (
+                r#"{"detections": [{"pixel": [1, 2], "confidence": "high"}]}"#,
+                "line 7: detections[0]: confidence:",
+            ),
+            (
+                r#"{"detections": [{"pixel": [1e999, 2]}]}"#,
+                "line 7: not valid JSON",
+            ),
+            (
+                r#"{"detections": [{"pixel": [NaN, 2]}]}"#,
+                "line 7: not valid JSON",
+            ),
+        ] {
+            let e = parse_line(&s, line, "line 7").unwrap_err().to_string();
+            assert!(e.starts_with(says), "{line}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+    }
+}
