@@ -48,6 +48,14 @@ pub struct DatasetArgs {
     /// A real sensor's empty frame (same size): images are it plus the rendered change.
     #[arg(long)]
     background: Option<PathBuf>,
+    /// Share of samples that are empty frames, labelled with no contact (for counting a
+    /// detector's false positives). Labels then take the scene form {"contacts": [...]}.
+    #[arg(long = "empty-fraction", default_value_t = 0.0)]
+    empty_fraction: f64,
+    /// Contacts per (non-empty) sample: n or min..max, drawn uniformly. Above one, labels
+    /// take the scene form {"contacts": [...]}, as render --scene writes them.
+    #[arg(long = "contacts-per-sample")]
+    contacts_per_sample: Option<String>,
     /// PNG compression: none, fast, default, best.
     #[arg(long, default_value = "fast")]
     png: String,
@@ -111,6 +119,10 @@ impl DatasetArgs {
         spec.light_jitter = self.light_jitter;
         spec.paint_jitter = self.paint_jitter;
         spec.background = self.background;
+        spec.empty_fraction = self.empty_fraction;
+        if let Some(c) = self.contacts_per_sample {
+            spec.contacts_per_sample = dataset::parse_contacts_range(&c)?;
+        }
         spec.png = dataset::PngLevel::from_name(&self.png)?;
         spec.workers = self.jobs.unwrap_or(spec.workers);
         spec.streams = self.streams.unwrap_or(spec.streams);

@@ -86,13 +86,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let (frame, truths) = renderer.render_scene(&presses)?;
     write_frame(&frame, &args)?;
     let labels = if args.scene.is_some() {
-        let (count, bbox) = frame.mask();
-        json!({
-            "contacts": truths.iter().map(|t| t.to_json()).collect::<Vec<_>>(),
-            "mask_pixels": count,
-            "mask_bbox": bbox,
-            "over_pressed": truths.iter().any(|t| t.over_pressed),
-        })
+        geltip::render::scene_labels(&frame, &truths)
     } else {
         truths[0].to_json()
     };

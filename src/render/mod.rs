@@ -123,6 +123,19 @@ impl GroundTruth {
     }
 }
 
+/// The labels of a frame of several contacts (or none), as `geltip render --scene` writes
+/// them: each contact's labels, the union mask's pixel count and box, and whether any
+/// object pressed the gel against the shell.
+pub fn scene_labels(frame: &Frame, truths: &[GroundTruth]) -> serde_json::Value {
+    let (count, bbox) = frame.mask();
+    serde_json::json!({
+        "contacts": truths.iter().map(GroundTruth::to_json).collect::<Vec<_>>(),
+        "mask_pixels": count,
+        "mask_bbox": bbox,
+        "over_pressed": truths.iter().any(|t| t.over_pressed),
+    })
+}
+
 /// A rendered frame: RGBA8 pixels (row-major, tightly packed) and the indentation (mm)
 /// each pixel sees.
 #[derive(Debug, Clone, PartialEq)]

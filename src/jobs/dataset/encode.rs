@@ -19,7 +19,8 @@ use std::time::{Duration, Instant};
 pub(super) struct Job {
     pub k: u64,
     pub frame: Frame,
-    pub truth: GroundTruth,
+    /// The labels of the frame's contacts (one, unless the set is of scenes).
+    pub truths: Vec<GroundTruth>,
 }
 
 /// A sample's files: relative path and bytes.
@@ -131,7 +132,15 @@ impl<'a> SampleWriter<'a> {
             "depth": depth,
             "mask": mask,
         });
-        if let (Value::Object(l), Value::Object(t)) = (&mut label, job.truth.to_json()) {
+        let truth = if self.spec.scenes() {
+            render::scene_labels(&job.frame, &job.truths)
+        } else {
+            job.truths
+                .first()
+                .map(GroundTruth::to_json)
+                .unwrap_or_default()
+        };
+        if let (Value::Object(l), Value::Object(t)) = (&mut label, truth) {
             l.extend(t);
         }
         let line = serde_json::to_string(&label)

@@ -38,10 +38,12 @@ pub mod store;
 pub use look::fnv1a64;
 pub use reference::{reference_of_set, REFERENCE};
 pub use sampling::{
-    load_objects, make_contact, sample_contact, visible_arc_length, SampleRng, MAX_ATTEMPTS,
+    load_objects, make_contact, sample_contact, sample_contacts, visible_arc_length, SampleRng,
+    MAX_ATTEMPTS,
 };
 pub use spec::{
-    default_depth_range, default_streams, default_workers, parse_depth_range, PngLevel, Shard, Spec,
+    default_depth_range, default_streams, default_workers, parse_contacts_range, parse_depth_range,
+    PngLevel, Shard, Spec, MAX_CONTACTS_PER_SAMPLE,
 };
 pub use store::{merge, LABELS, MANIFEST};
 

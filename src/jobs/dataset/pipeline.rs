@@ -3,11 +3,13 @@
 //! threads post-process, encode and write the frames.
 
 use super::encode::{Job, SampleWriter};
-use super::sampling::sample_contact;
+use super::reference::{reference_image, REFERENCE};
+use super::sampling::{sample_contact, sample_contacts};
 use super::spec::Spec;
 use super::{Progress, Report, Split};
 use crate::error::{GeltipError, Result};
 use crate::object::Object;
+use crate::output;
 use crate::render::gpu::{PreparedBatch, Renderer, MAX_BATCH};
 use crate::render::pool::RenderPool;
 use crate::render::{Frame, GroundTruth};
@@ -19,7 +21,7 @@ use std::time::{Duration, Instant};
 /// A batch of samples rendered by one stream.
 struct Rendered<'t> {
     indices: &'t [u64],
-    frames: Vec<(Frame, GroundTruth)>,
+    frames: Vec<(Frame, Vec<GroundTruth>)>,
     /// Drawing and preparing the batch's contacts.
     prepare: Duration,
     render: Duration,
@@ -46,6 +48,13 @@ pub(super) fn render_samples(
     let mut pool = RenderPool::start(&render_sensor, spec.streams, objects)?;
     report.startup = start.elapsed();
     let start = Instant::now();
+    if let Some(dir) = out {
+        let path = dir.join(REFERENCE);
+        if !path.is_file() {
+            let rgb = reference_image(spec, pool.first().reference(), background.clone());
+            output::write_png_rgb8(path, rgb.width(), rgb.height(), rgb.as_raw())?;
+        }
+    }
     let writer = SampleWriter::new(spec, out, pool.first().reference(), background)?;
     let total = todo.len() as u64;
     let mut split = Split::default();
@@ -94,19 +103,27 @@ fn render_batches<'t>(
     let total = todo.len() as u64;
     let preparer = pool.first().preparer();
     // Drawn and prepared on the pool's producer thread, a batch ahead of each stream.
+    let layout = (spec.empty_fraction, spec.contacts_per_sample);
     let batches = todo.chunks(MAX_BATCH).map(move |indices| {
         let t = Instant::now();
         let prepared = indices
             .iter()
-            .map(|&k| sample_contact(&spec.sensor, objects, spec.depth_range, spec.seed, k))
+            .map(|&k| {
+                let (sensor, range, seed) = (&spec.sensor, spec.depth_range, spec.seed);
+                if spec.scenes() {
+                    sample_contacts(sensor, objects, range, layout, seed, k)
+                } else {
+                    sample_contact(sensor, objects, range, seed, k).map(|c| vec![c])
+                }
+            })
             .collect::<Result<Vec<_>>>()
-            .and_then(|contacts| preparer.prepare(&contacts));
+            .and_then(|frames| preparer.prepare_frames(&frames));
         (indices, prepared, t.elapsed())
     });
     let render =
         |renderer: &mut Renderer,
          (indices, prepared, prepare): (&'t [u64], Result<PreparedBatch>, Duration)| {
-            let frames = renderer.render_prepared(prepared?)?;
+            let frames = renderer.render_prepared_frames(prepared?)?;
             let t = renderer.timings();
             Ok(Rendered {
                 indices,
@@ -122,11 +139,11 @@ fn render_batches<'t>(
         split.prepare += batch.prepare;
         split.render += batch.render;
         split.readback += batch.readback;
-        for (&k, (frame, truth)) in batch.indices.iter().zip(batch.frames) {
+        for (&k, (frame, truths)) in batch.indices.iter().zip(batch.frames) {
             if writer.failed() {
                 return Err(stopped());
             }
-            tx.send(Job { k, frame, truth }).map_err(|_| stopped())?;
+            tx.send(Job { k, frame, truths }).map_err(|_| stopped())?;
         }
         progress(Progress {
             done: writer.done(),

@@ -28,6 +28,8 @@ pub struct SampleRng(u64);
 const STREAM_CONTACT: u64 = 1;
 pub(super) const STREAM_LOOK: u64 = 2;
 pub(super) const STREAM_NOISE: u64 = 3;
+/// Whether a sample is empty and how many contacts it holds.
+const STREAM_LAYOUT: u64 = 4;
 
 impl SampleRng {
     pub fn new(parts: &[u64]) -> SampleRng {
@@ -78,9 +80,47 @@ pub fn sample_contact(
     seed: u64,
     k: u64,
 ) -> Result<Press> {
+    nth_contact(sensor, objects, depth_range, seed, k, 0)
+}
+
+/// Sample `k`'s contacts: none with probability `empty_fraction`, else a count uniform in
+/// `contacts` (inclusive), each drawn as [`sample_contact`] draws one (the first exactly so,
+/// the others from streams of their own).
+pub fn sample_contacts(
+    sensor: &Sensor,
+    objects: &[Arc<Object>],
+    depth_range: (f64, f64),
+    (empty_fraction, contacts): (f64, (u32, u32)),
+    seed: u64,
+    k: u64,
+) -> Result<Vec<Press>> {
+    let mut rng = SampleRng::new(&[seed, k, STREAM_LAYOUT]);
+    if rng.unit() < empty_fraction {
+        return Ok(Vec::new());
+    }
+    let span = u64::from(contacts.1.saturating_sub(contacts.0)) + 1;
+    let n = u64::from(contacts.0) + rng.next_u64() % span;
+    (0..n)
+        .map(|j| nth_contact(sensor, objects, depth_range, seed, k, j))
+        .collect()
+}
+
+/// Contact `j` of sample `k`.
+fn nth_contact(
+    sensor: &Sensor,
+    objects: &[Arc<Object>],
+    depth_range: (f64, f64),
+    seed: u64,
+    k: u64,
+    j: u64,
+) -> Result<Press> {
     let s_max = visible_arc_length(sensor);
     for attempt in 0..MAX_ATTEMPTS {
-        let mut rng = SampleRng::new(&[seed, k, STREAM_CONTACT, attempt]);
+        let mut rng = if j == 0 {
+            SampleRng::new(&[seed, k, STREAM_CONTACT, attempt])
+        } else {
+            SampleRng::new(&[seed, k, STREAM_CONTACT, attempt, j])
+        };
         let s = rng.uniform(0.0, s_max);
         let azimuth = rng.uniform(0.0, 360.0);
         let depth = rng.uniform(depth_range.0, depth_range.1);

@@ -150,6 +150,11 @@ pub struct Spec {
     pub paint_jitter: f64,
     /// A real sensor's empty frame: each image is this plus the rendered change.
     pub background: Option<PathBuf>,
+    /// Share of samples that are empty frames (labelled, no contact: what false positives
+    /// are counted on).
+    pub empty_fraction: f64,
+    /// Contacts in each non-empty sample, drawn uniformly from this range (inclusive).
+    pub contacts_per_sample: (u32, u32),
     pub png: PngLevel,
     /// Encoder threads (does not change the files).
     pub workers: usize,
@@ -178,6 +183,8 @@ impl Spec {
             light_jitter: 0.0,
             paint_jitter: 0.0,
             background: None,
+            empty_fraction: 0.0,
+            contacts_per_sample: (1, 1),
             png: PngLevel::Fast,
             workers: default_workers(),
             streams: default_streams(),
@@ -212,6 +219,20 @@ impl Spec {
         if self.objects.is_empty() {
             return Err(GeltipError::input("--objects", "the list is empty"));
         }
+        let e = self.empty_fraction;
+        if !(0.0..1.0).contains(&e) {
+            return Err(GeltipError::input(
+                "--empty-fraction",
+                format!("must be a number in [0, 1), got {e}"),
+            ));
+        }
+        let (a, b) = self.contacts_per_sample;
+        if a < 1 || b < a || b > MAX_CONTACTS_PER_SAMPLE {
+            return Err(GeltipError::input(
+                format!("--contacts-per-sample {a}..{b}"),
+                format!("needs 1 <= min <= max <= {MAX_CONTACTS_PER_SAMPLE}"),
+            ));
+        }
         for (what, v, max) in [
             ("--noise", self.noise, 255.0),
             ("--light-jitter", self.light_jitter, 1.0),
@@ -227,9 +248,30 @@ impl Spec {
         Ok(())
     }
 
+    /// Whether samples are labelled as scenes (`{"contacts": [...]}`): when some are empty
+    /// or hold several contacts. Otherwise each line is one contact's labels.
+    pub fn scenes(&self) -> bool {
+        self.empty_fraction > 0.0 || self.contacts_per_sample != (1, 1)
+    }
+
     /// The options that define the set's samples, as `dataset.json` records and a resume
-    /// compares them (everything but the shard, the workers and the command line).
+    /// compares them (everything but the shard, the workers and the command line). Options
+    /// left at their defaults that older sets do not record are left out.
     pub fn options_json(&self, background_hash: Option<u64>) -> Value {
+        let mut options = self.base_options_json(background_hash);
+        if let Value::Object(o) = &mut options {
+            if self.empty_fraction > 0.0 {
+                o.insert("empty_fraction".into(), json!(self.empty_fraction));
+            }
+            if self.contacts_per_sample != (1, 1) {
+                let (a, b) = self.contacts_per_sample;
+                o.insert("contacts_per_sample".into(), json!([a, b]));
+            }
+        }
+        options
+    }
+
+    fn base_options_json(&self, background_hash: Option<u64>) -> Value {
         json!({
             "sensor": self.sensor_arg,
             "sensor_config": serde_json::to_value(&self.sensor.config).unwrap_or(Value::Null),
@@ -249,6 +291,26 @@ impl Spec {
             "png": self.png.name(),
         })
     }
+}
+
+/// Most contacts one sample may hold.
+pub const MAX_CONTACTS_PER_SAMPLE: u32 = 8;
+
+/// Parses `--contacts-per-sample`: `n` or `min..max`.
+pub fn parse_contacts_range(text: &str) -> Result<(u32, u32)> {
+    let bad = || {
+        GeltipError::input(
+            format!("--contacts-per-sample {text}"),
+            "expected a count n or a range min..max, e.g. 1..3",
+        )
+    };
+    let (a, b) = match text.split_once("..") {
+        Some((a, b)) => (a, b),
+        None => (text, text),
+    };
+    let a: u32 = a.trim().parse().map_err(|_| bad())?;
+    let b: u32 = b.trim().parse().map_err(|_| bad())?;
+    Ok((a, b))
 }
 
 /// The default press depths for a finger whose gel is `shell_mm` thick: from a light touch
@@ -295,6 +357,15 @@ mod tests {
             assert!(e.contains("--shard") && !e.contains('\n'), "{e}");
         }
         assert_eq!(parse_depth_range("0.5..1.5").unwrap(), (0.5, 1.5));
+        assert_eq!(parse_contacts_range("1..3").unwrap(), (1, 3));
+        assert_eq!(parse_contacts_range("2").unwrap(), (2, 2));
+        for bad in ["x", "1..", "-1..2", "1.5..2"] {
+            let e = parse_contacts_range(bad).unwrap_err().to_string();
+            assert!(
+                e.starts_with("--contacts-per-sample") && !e.contains('\n'),
+                "{e}"
+            );
+        }
         assert!(parse_depth_range("0.5-1").is_err());
     }
 }

@@ -2,6 +2,7 @@
 //! (the samples whose line and files exist), temporary files a killed run left, the lock that
 //! keeps a second run out, and merging shard directories into one set.
 
+use super::reference::REFERENCE;
 use super::spec::{Shard, Spec};
 use crate::error::{GeltipError, Result};
 use crate::output::{self, DirLock};
@@ -216,6 +217,10 @@ pub fn merge(out: &Path, shards: &[PathBuf], command: &[String]) -> Result<u64> 
         }
     } else {
         output::write_json(out.join(MANIFEST), &wanted)?;
+    }
+    let reference = shards[0].join(REFERENCE);
+    if reference.is_file() && !same_dir(&shards[0], out) {
+        output::link_or_copy_atomic(&reference, out.join(REFERENCE))?;
     }
     let mut merged = BTreeMap::new();
     for (k, (dir, line)) in set.lines {

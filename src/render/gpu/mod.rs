@@ -191,22 +191,33 @@ impl Renderer {
         Ok(out)
     }
 
-    /// Renders a batch a [`Preparer`] prepared (at most [`MAX_BATCH`] contacts, in one
-    /// submission), a frame each, each frame drawing its noise seed in turn.
+    /// Renders a batch a [`Preparer`] prepared with [`Preparer::prepare`] (at most
+    /// [`MAX_BATCH`] contacts, in one submission), a frame each, each frame drawing its noise
+    /// seed in turn.
     pub fn render_prepared(&mut self, batch: PreparedBatch) -> Result<Vec<(Frame, GroundTruth)>> {
+        let frames = self.render_prepared_frames(batch)?;
+        Ok(frames
+            .into_iter()
+            .filter_map(|(frame, truths)| Some((frame, truths.into_iter().next()?)))
+            .collect())
+    }
+
+    /// Renders a batch of frames of any number of contacts each (at most [`MAX_BATCH`]
+    /// frames, in one submission), each frame drawing its noise seed in turn: each frame with
+    /// its contacts' labels.
+    pub fn render_prepared_frames(
+        &mut self,
+        batch: PreparedBatch,
+    ) -> Result<Vec<(Frame, Vec<GroundTruth>)>> {
         if batch.0.len() > MAX_BATCH {
             return Err(prepare::too_many(batch.0.len()));
         }
         let scenes = batch
             .0
             .into_iter()
-            .map(|p| (vec![p], self.next_noise_seed()))
+            .map(|contacts| (contacts, self.next_noise_seed()))
             .collect();
-        let frames = self.render_frames(scenes, Duration::ZERO)?;
-        Ok(frames
-            .into_iter()
-            .filter_map(|(frame, truths)| Some((frame, truths.into_iter().next()?)))
-            .collect())
+        self.render_frames(scenes, Duration::ZERO)
     }
 
     /// Renders several objects pressed into the finger at once, as one frame: the skin is

@@ -44,9 +44,10 @@ impl Prepared {
     }
 }
 
-/// Contacts prepared for the GPU (poses, footprints, uniforms): made by a [`Preparer`],
-/// rendered by [`super::Renderer::render_prepared`], one frame each.
-pub struct PreparedBatch(pub(super) Vec<Prepared>);
+/// Frames prepared for the GPU (their contacts' poses, footprints, uniforms): made by a
+/// [`Preparer`], rendered by [`super::Renderer::render_prepared`] in one submission. Each
+/// frame holds any number of contacts (none: the empty finger).
+pub struct PreparedBatch(pub(super) Vec<Vec<Prepared>>);
 
 /// The CPU half of rendering, which needs no GPU: a contact's pose (its first-touch search)
 /// and footprint. Cheap to clone; `Send`, so a pipeline can prepare the next batch while
@@ -63,7 +64,22 @@ impl Preparer {
     pub fn prepare(&self, presses: &[Press]) -> Result<PreparedBatch> {
         presses
             .iter()
-            .map(|p| prepare(&self.sensor, &self.grid, p))
+            .map(|p| Ok(vec![prepare(&self.sensor, &self.grid, p)?]))
+            .collect::<Result<Vec<_>>>()
+            .map(PreparedBatch)
+    }
+
+    /// Prepares frames of several contacts each (none: the empty finger) for one submission,
+    /// a frame each (at most [`MAX_BATCH`] render in one).
+    pub fn prepare_frames(&self, frames: &[Vec<Press>]) -> Result<PreparedBatch> {
+        frames
+            .iter()
+            .map(|presses| {
+                presses
+                    .iter()
+                    .map(|p| prepare(&self.sensor, &self.grid, p))
+                    .collect::<Result<Vec<_>>>()
+            })
             .collect::<Result<Vec<_>>>()
             .map(PreparedBatch)
     }

@@ -17,7 +17,13 @@ impl Renderer {
     /// list). Elsewhere each stage is submitted and waited for on its own, and its wall time
     /// includes both. The readback is timed on the CPU either way.
     pub fn profile_stages(&mut self, press: &Press) -> Result<Vec<(&'static str, Duration)>> {
-        let prepared = self.preparer().prepare(std::slice::from_ref(press))?.0;
+        let prepared: Vec<Prepared> = self
+            .preparer()
+            .prepare(std::slice::from_ref(press))?
+            .0
+            .into_iter()
+            .flatten()
+            .collect();
         for p in &prepared {
             self.ready_object(p.uniform.object_kind, &p.press.object)?;
         }
