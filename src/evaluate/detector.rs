@@ -188,7 +188,7 @@ impl Detector for CommandDetector {
         Ok(found)
     }
 
-    fn finish(&mut self, _seen: &[u64]) -> Result<()> {
+    fn finish(&mut self) -> Result<()> {
         // End of its stdin ends it; one that does not end in time is stopped.
         self.stdin = None;
         let until = Instant::now() + Duration::from_secs(5);
@@ -277,28 +277,38 @@ impl Detector for Predictions {
         Needs::Index
     }
 
-    fn detect(&mut self, sample: &Sample) -> Result<Vec<Found>> {
-        let k = sample.truth.index;
-        match self.by_sample.get(&k) {
-            Some((_, found)) => Ok(found.clone()),
-            None => Err(GeltipError::input(
+    fn start(&mut self, indices: &[u64]) -> Result<()> {
+        let set: std::collections::BTreeSet<u64> = indices.iter().copied().collect();
+        if let Some((k, (line, _))) = self.by_sample.iter().find(|(k, _)| !set.contains(k)) {
+            return Err(GeltipError::input(
+                format!("{}: line {line}", self.path.display()),
+                format!("sample {k} is not in the set ({} samples)", set.len()),
+            ));
+        }
+        match indices.iter().find(|k| !self.by_sample.contains_key(k)) {
+            Some(k) => Err(GeltipError::input(
                 self.path.display().to_string(),
                 format!(
-                    "no line for sample {k}; a frame with nothing found is {{\"sample\": {k}, \"detections\": []}}"
+                    "no line for sample {k} ({} of {} samples have none); a frame with nothing found is {{\"sample\": {k}, \"detections\": []}}",
+                    indices.iter().filter(|k| !self.by_sample.contains_key(k)).count(),
+                    indices.len()
                 ),
-            )),
-        }
-    }
-
-    fn finish(&mut self, seen: &[u64]) -> Result<()> {
-        let seen: std::collections::BTreeSet<u64> = seen.iter().copied().collect();
-        match self.by_sample.iter().find(|(k, _)| !seen.contains(k)) {
-            Some((k, (line, _))) => Err(GeltipError::input(
-                format!("{}: line {line}", self.path.display()),
-                format!("sample {k} is not in the set ({} samples)", seen.len()),
             )),
             None => Ok(()),
         }
+    }
+
+    fn detect(&mut self, sample: &Sample) -> Result<Vec<Found>> {
+        let k = sample.truth.index;
+        self.by_sample
+            .get(&k)
+            .map(|(_, found)| found.clone())
+            .ok_or_else(|| {
+                GeltipError::input(
+                    self.path.display().to_string(),
+                    format!("no line for sample {k}"),
+                )
+            })
     }
 }
 
@@ -328,7 +338,11 @@ impl Detector for Named<'_> {
         self.inner.detect(sample)
     }
 
-    fn finish(&mut self, seen: &[u64]) -> Result<()> {
-        self.inner.finish(seen)
+    fn start(&mut self, indices: &[u64]) -> Result<()> {
+        self.inner.start(indices)
+    }
+
+    fn finish(&mut self) -> Result<()> {
+        self.inner.finish()
     }
 }

@@ -119,13 +119,18 @@ pub trait Detector {
         Needs::Pixels
     }
 
+    /// Called before the first frame with the indices of every frame to come: a detector
+    /// that names frames itself (a predictions file) checks it names these and no others.
+    fn start(&mut self, indices: &[u64]) -> Result<()> {
+        let _ = indices;
+        Ok(())
+    }
+
     /// The frame's detections.
     fn detect(&mut self, sample: &Sample) -> Result<Vec<Found>>;
 
-    /// Called once every frame has been seen (their indices in `seen`): a detector that
-    /// named frames itself (a predictions file) checks it named no others.
-    fn finish(&mut self, seen: &[u64]) -> Result<()> {
-        let _ = seen;
+    /// Called once every frame has been scored.
+    fn finish(&mut self) -> Result<()> {
         Ok(())
     }
 }
@@ -201,7 +206,10 @@ pub fn evaluate(
             frames: Vec::new(),
         })
         .collect();
-    let mut seen = Vec::new();
+    let indices = source.indices();
+    for d in detectors.iter_mut() {
+        d.start(&indices)?;
+    }
     source.run(needs, options.work_dir.as_deref(), |sample| {
         let mut scored = Vec::with_capacity(detectors.len());
         for d in detectors.iter_mut() {
@@ -214,14 +222,13 @@ pub fn evaluate(
             });
         }
         each(&sample, &scored)?;
-        seen.push(sample.truth.index);
         for (e, s) in out.iter_mut().zip(scored) {
             e.frames.push(s);
         }
         Ok(())
     })?;
     for d in detectors.iter_mut() {
-        d.finish(&seen)?;
+        d.finish()?;
     }
     Ok(out)
 }

@@ -61,6 +61,14 @@ impl Source {
         self.len() == 0
     }
 
+    /// The indices of its frames, in order.
+    pub fn indices(&self) -> Vec<u64> {
+        match self {
+            Source::Dataset(set) => set.entries.iter().map(|(t, _)| t.index).collect(),
+            Source::Suite(suite) => (0..suite.len() as u64).collect(),
+        }
+    }
+
     /// The sensor of its first frame.
     pub fn sensor(&self) -> &Sensor {
         match self {
@@ -146,11 +154,6 @@ impl DatasetSource {
             sensor,
             entries,
         })
-    }
-
-    /// The indices of the set's samples, in order.
-    pub fn indices(&self) -> impl Iterator<Item = u64> + '_ {
-        self.entries.iter().map(|(t, _)| t.index)
     }
 
     fn run(
