@@ -7,11 +7,41 @@ use crate::error::Result;
 use crate::plot;
 use crate::sensor::Sensor;
 use crate::view;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use serde_json::Value;
 
 /// A detection this far (mm) or farther from its contact is drawn as a large error.
 const LARGE_ERROR_MM: f64 = 1.0;
+
+/// The axes a group chart draws on.
+type GroupAxes = Cartesian2d<RangedCoordf64, RangedCoordf64>;
+
+/// A chart over `n` groups named by `label`, from 0 to `top` on the y axis.
+fn group_chart<'a, 'b>(
+    area: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    caption: String,
+    (n, label): (usize, &dyn Fn(&f64) -> String),
+    (top, y_desc): (f64, &str),
+    x_desc: &str,
+) -> std::result::Result<ChartContext<'a, SVGBackend<'b>, GroupAxes>, Box<dyn std::error::Error>> {
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 17))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(-0.5f64..(n as f64 - 0.5), 0f64..top)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_labels(n)
+        .x_label_formatter(label)
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    Ok(chart)
+}
 
 /// Two panels over the groups of `key` (`by_depth`, `by_region`): the share of visible
 /// contacts found, and the mean error with a whisker to the 95th percentile.
@@ -20,11 +50,7 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
     let n = groups.len().max(1);
     let what = key.trim_start_matches("by_").replace('_', " ");
     let value = |s: &Value, g: &str, path: &[&str]| -> Option<f64> {
-        let mut v = &s[key][g];
-        for p in path {
-            v = &v[*p];
-        }
-        v.as_f64()
+        path.iter().fold(&s[key][g], |v, p| &v[*p]).as_f64()
     };
     let top_error = summaries
         .iter()
@@ -44,41 +70,20 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
     };
     plot::svg(&format!("by {what}"), (1000, 420), |root| {
         let (left, right) = root.split_horizontally(500);
-        let x_range = -0.5f64..(n as f64 - 0.5);
-        let mut recall = ChartBuilder::on(&left)
-            .caption(format!("Contacts found, by {what}"), ("sans-serif", 17))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(50)
-            .build_cartesian_2d(x_range.clone(), 0f64..105f64)?;
-        recall
-            .configure_mesh()
-            .x_labels(n)
-            .x_label_formatter(&label)
-            .x_desc(what.clone())
-            .y_desc("found (%)")
-            .draw()?;
-        let mut error = ChartBuilder::on(&right)
-            .caption(
-                format!("Error by {what} (mean, whisker to p95)"),
-                ("sans-serif", 17),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(50)
-            .build_cartesian_2d(x_range, 0f64..top_error)?;
-        error
-            .configure_mesh()
-            .x_labels(n)
-            .x_label_formatter(&label)
-            .x_desc(what.clone())
-            .y_desc("error (mm)")
-            .draw()?;
+        let caption = format!("Contacts found, by {what}");
+        let mut recall = group_chart(&left, caption, (n, &label), (105.0, "found (%)"), &what)?;
+        let caption = format!("Error by {what} (mean, whisker to p95)");
+        let mut error = group_chart(
+            &right,
+            caption,
+            (n, &label),
+            (top_error, "error (mm)"),
+            &what,
+        )?;
         let count = summaries.len() as f64;
         for (k, s) in summaries.iter().enumerate() {
             let c = plot::colour(k);
             let dx = (k as f64 - (count - 1.0) / 2.0) * 0.15;
-            let name = s["detector"].as_str().unwrap_or("?").to_string();
             let rates: Vec<(f64, f64)> = groups
                 .iter()
                 .enumerate()
@@ -86,7 +91,7 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
                 .collect();
             recall
                 .draw_series(LineSeries::new(rates.clone(), c.stroke_width(2)))?
-                .label(name.clone())
+                .label(s["detector"].as_str().unwrap_or("?").to_string())
                 .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
             recall.draw_series(rates.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
             error.draw_series(groups.iter().enumerate().filter_map(|(i, g)| {
@@ -112,35 +117,56 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
     })
 }
 
+/// Where a run's contacts and false positives are on the unrolled finger: (azimuth in
+/// degrees, arc length from the tip in mm).
+#[derive(Default)]
+struct Marks {
+    good: Vec<(f64, f64)>,
+    large: Vec<(f64, f64)>,
+    missed: Vec<(f64, f64)>,
+    false_positives: Vec<(f64, f64)>,
+}
+
+impl Marks {
+    fn of(eval: &Evaluation, sensor: &Sensor) -> Marks {
+        let s_top = view::finger_length(sensor);
+        let mut marks = Marks::default();
+        for f in &eval.frames {
+            for (i, c) in f.truth.contacts.iter().enumerate() {
+                if !c.visible {
+                    continue;
+                }
+                let at = (c.azimuth_deg.rem_euclid(360.0), c.s_mm);
+                match f.score.matches.iter().find(|m| m.contact == i) {
+                    Some(m) if m.error_mm >= LARGE_ERROR_MM => marks.large.push(at),
+                    Some(_) => marks.good.push(at),
+                    None => marks.missed.push(at),
+                }
+            }
+            for &j in &f.score.false_positives {
+                if let Some(p) = f.found[j].point {
+                    let sc = sensor.finger.coord_of(p);
+                    let az = sc.phi.to_degrees().rem_euclid(360.0);
+                    marks.false_positives.push((az, sc.s.min(s_top)));
+                }
+            }
+        }
+        marks
+    }
+}
+
 /// The unrolled finger (azimuth across, arc length from the tip down): each visible contact
 /// where it is, green when found well, orange when found with an error of 1 mm or more, a
 /// red cross when missed; false positives as grey pluses where they were placed.
 pub fn failure_map(eval: &Evaluation, sensor: &Sensor) -> Result<String> {
     let s_top = view::finger_length(sensor);
     let finger = &sensor.finger;
-    let mut good = Vec::new();
-    let mut large = Vec::new();
-    let mut missed = Vec::new();
-    let mut false_positives = Vec::new();
-    for f in &eval.frames {
-        for (i, c) in f.truth.contacts.iter().enumerate() {
-            if !c.visible {
-                continue;
-            }
-            let at = (c.azimuth_deg.rem_euclid(360.0), c.s_mm);
-            match f.score.matches.iter().find(|m| m.contact == i) {
-                Some(m) if m.error_mm >= LARGE_ERROR_MM => large.push(at),
-                Some(_) => good.push(at),
-                None => missed.push(at),
-            }
-        }
-        for &j in &f.score.false_positives {
-            if let Some(p) = f.found[j].point {
-                let sc = finger.coord_of(p);
-                false_positives.push((sc.phi.to_degrees().rem_euclid(360.0), sc.s.min(s_top)));
-            }
-        }
-    }
+    let Marks {
+        good,
+        large,
+        missed,
+        false_positives,
+    } = Marks::of(eval, sensor);
     let title = format!(
         "{}: where contacts were missed (×) or found 1 mm or more off (orange)",
         eval.detector

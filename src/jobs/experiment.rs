@@ -400,9 +400,8 @@ struct Series {
     missed: Vec<usize>,
 }
 
-/// Error per position per method, with the paper's published numbers, as an SVG chart.
-pub fn chart_svg(report: &Report) -> Result<String> {
-    use plotters::prelude::*;
+/// The chart's series: the paper's published errors, then each method's.
+fn chart_series(report: &Report) -> Vec<Series> {
     let mut series = vec![Series {
         name: "paper (published)".into(),
         colour: plot::REFERENCE_GREY,
@@ -432,6 +431,13 @@ pub fn chart_svg(report: &Report) -> Result<String> {
             missed,
         });
     }
+    series
+}
+
+/// Error per position per method, with the paper's published numbers, as an SVG chart.
+pub fn chart_svg(report: &Report) -> Result<String> {
+    use plotters::prelude::*;
+    let series = chart_series(report);
     let top = series
         .iter()
         .flat_map(|s| s.points.iter().map(|(_, m, sd)| m + sd))

@@ -7,8 +7,8 @@
 
 use crate::error::{GeltipError, Result};
 use crate::evaluate::{
-    self, Detector, Found, MethodDetector, Options, Scored, Source, Suite, SuiteJob, SuitePart,
-    Target,
+    self, Detector, Evaluation, Found, MethodDetector, Options, Scored, Source, Suite, SuiteJob,
+    SuitePart, Target,
 };
 use crate::localise::Method;
 use crate::object::{Object, Solid};
@@ -299,67 +299,96 @@ pub fn run(
         progress(frames.len(), total);
         Ok(())
     })?;
-    let mut report = Report {
+    let report = Report {
         sensor: sensor.name.clone(),
         sweep: sweep.clone(),
-        trials: Vec::new(),
-        non_finite: 0,
-        false_detections: Vec::new(),
-        two_contacts: Vec::new(),
+        trials: trials(sensor, sweep, &roles, &frames, &evaluations),
+        non_finite: evaluations
+            .iter()
+            .flat_map(|e| e.frames.iter().flat_map(|f| f.found.iter()))
+            .filter(|f| !finite(f))
+            .count(),
+        false_detections: false_detections(sweep, &roles, &evaluations),
+        two_contacts: two_contact_trials(sweep, &roles, &evaluations),
     };
-    report.non_finite = evaluations
-        .iter()
-        .flat_map(|e| e.frames.iter().flat_map(|f| f.found.iter()))
-        .filter(|f| !finite(f))
-        .count();
-    for (k, role) in roles.iter().enumerate() {
-        if let (Role::Contact { noisy }, (Some(truth), changed)) = (role, &frames[k]) {
-            for (e, &method) in evaluations.iter().zip(&sweep.methods) {
-                report
-                    .trials
-                    .push(trial(sensor, *noisy, method, truth, *changed, &e.frames[k]));
-            }
-        }
-    }
-    settle_noisy_traces(&mut report.trials);
-    for &noisy in &[false, true] {
-        for (e, &method) in evaluations.iter().zip(&sweep.methods) {
-            let empties: Vec<&Scored> = roles
-                .iter()
-                .zip(&e.frames)
-                .filter(|(r, _)| **r == Role::Empty { noisy })
-                .map(|(_, f)| f)
-                .collect();
-            if noisy && !roles.contains(&Role::Contact { noisy: true }) {
-                continue;
-            }
-            let hits = empties.iter().filter(|f| !f.found.is_empty()).count();
-            report
-                .false_detections
-                .push((noisy, method, hits, empties.len()));
-        }
-    }
-    for (e, &method) in evaluations.iter().zip(&sweep.methods) {
-        let pairs: Vec<&Scored> = roles
-            .iter()
-            .zip(&e.frames)
-            .filter(|(r, _)| **r == Role::Pair)
-            .map(|(_, f)| f)
-            .collect();
-        let errors: Vec<f64> = pairs
-            .iter()
-            .filter_map(|f| f.score.matches.first().map(|m| m.error_mm))
-            .collect();
-        let mean = (!errors.is_empty()).then(|| errors.iter().sum::<f64>() / errors.len() as f64);
-        report
-            .two_contacts
-            .push((method, pairs.len(), errors.len(), mean));
-    }
     report.check(sensor)?;
     if let Some(dir) = out {
         report.write(dir, sensor)?;
     }
     Ok(report)
+}
+
+/// Every contact's trial, for every method.
+fn trials(
+    sensor: &Sensor,
+    sweep: &Sweep,
+    roles: &[Role],
+    frames: &[(Option<GroundTruth>, bool)],
+    evaluations: &[Evaluation],
+) -> Vec<Trial> {
+    let mut trials = Vec::new();
+    for (k, role) in roles.iter().enumerate() {
+        if let (Role::Contact { noisy }, (Some(truth), changed)) = (role, &frames[k]) {
+            for (e, &method) in evaluations.iter().zip(&sweep.methods) {
+                trials.push(trial(sensor, *noisy, method, truth, *changed, &e.frames[k]));
+            }
+        }
+    }
+    settle_noisy_traces(&mut trials);
+    trials
+}
+
+/// The frames of `role`, as `e` scored them.
+fn frames_of<'a>(roles: &[Role], e: &'a Evaluation, role: Role) -> Vec<&'a Scored> {
+    roles
+        .iter()
+        .zip(&e.frames)
+        .filter(|(r, _)| **r == role)
+        .map(|(_, f)| f)
+        .collect()
+}
+
+/// Per pass and method: the empty frames where something was detected, of how many.
+fn false_detections(
+    sweep: &Sweep,
+    roles: &[Role],
+    evaluations: &[Evaluation],
+) -> Vec<(bool, Method, usize, usize)> {
+    let mut out = Vec::new();
+    for noisy in [false, true] {
+        if noisy && !roles.contains(&Role::Contact { noisy: true }) {
+            continue;
+        }
+        for (e, &method) in evaluations.iter().zip(&sweep.methods) {
+            let empties = frames_of(roles, e, Role::Empty { noisy });
+            let hits = empties.iter().filter(|f| !f.found.is_empty()).count();
+            out.push((noisy, method, hits, empties.len()));
+        }
+    }
+    out
+}
+
+/// Per method: the pairs, those where something was matched, and the mean distance to the
+/// contact it matched (the nearer, there being one answer).
+fn two_contact_trials(
+    sweep: &Sweep,
+    roles: &[Role],
+    evaluations: &[Evaluation],
+) -> TwoContactTrials {
+    evaluations
+        .iter()
+        .zip(&sweep.methods)
+        .map(|(e, &method)| {
+            let pairs = frames_of(roles, e, Role::Pair);
+            let errors: Vec<f64> = pairs
+                .iter()
+                .filter_map(|f| f.score.matches.first().map(|m| m.error_mm))
+                .collect();
+            let mean =
+                (!errors.is_empty()).then(|| errors.iter().sum::<f64>() / errors.len() as f64);
+            (method, pairs.len(), errors.len(), mean)
+        })
+        .collect()
 }
 
 /// One contact's trial for one method.

@@ -114,6 +114,15 @@ impl Report {
 
     /// The report's tables.
     pub fn markdown(&self) -> String {
+        let mut md = self.rate_table();
+        self.depth_table(&mut md);
+        self.hidden_table(&mut md);
+        self.empty_and_pair_tables(&mut md);
+        md
+    }
+
+    /// The detection rate against depth.
+    fn rate_table(&self) -> String {
         let mut md = format!(
             "Sensor `{}`: sphere contacts at {} visible places x {} depths; NaN/inf in detections: {}.\n\n**Detection rate against depth (visible contacts)**\n\n| method | pass | {} |\n|---|---|{}\n",
             self.sensor,
@@ -139,8 +148,13 @@ impl Report {
                 );
             }
         }
+        md
+    }
+
+    /// The smallest depth found 95% of the time, per region, and the mean error.
+    fn depth_table(&self, md: &mut String) {
         let _ = writeln!(
-            md,
+            *md,
             "\n**Smallest depth detected ≥ 95% (and at every deeper depth), per region; mean error (mm) of detected contacts at ≥ 0.3 mm**\n\n| method | pass | {} | mean error |\n|---|---|{}---|",
             REGIONS.join(" | "),
             "---|".repeat(REGIONS.len())
@@ -165,14 +179,18 @@ impl Report {
                     format!("{:.2}", errs.iter().sum::<f64>() / errs.len() as f64)
                 };
                 let _ = writeln!(
-                    md,
+                    *md,
                     "| {m} | {} | {} | {mean} |",
                     self.pass_name(noisy),
                     cells.join(" | ")
                 );
             }
         }
-        let _ = writeln!(md, "\n**Contacts the lens cannot see** (full depth, up to 6 mm below the visible edge of their meridian, where the finger goes on that far)\n\n| method | pass | contacts | leaving no trace in the image | localised anyway | of which leaving no trace |\n|---|---|---|---|---|---|");
+    }
+
+    /// The contacts the lens cannot see, and how many were localised.
+    fn hidden_table(&self, md: &mut String) {
+        let _ = writeln!(*md, "\n**Contacts the lens cannot see** (full depth, up to 6 mm below the visible edge of their meridian, where the finger goes on that far)\n\n| method | pass | contacts | leaving no trace in the image | localised anyway | of which leaving no trace |\n|---|---|---|---|---|---|");
         for &noisy in &self.passes() {
             for &m in &self.sweep.methods {
                 let hidden: Vec<&Trial> = self
@@ -181,7 +199,7 @@ impl Report {
                     .filter(|t| t.noisy == noisy && t.method == m && !t.visible)
                     .collect();
                 let _ = writeln!(
-                    md,
+                    *md,
                     "| {m} | {} | {} | {} | {} | {} |",
                     self.pass_name(noisy),
                     hidden.len(),
@@ -194,19 +212,22 @@ impl Report {
                 );
             }
         }
-        let _ = writeln!(md, "\n**False detections on empty frames**\n\n| method | pass | detected / frames |\n|---|---|---|");
+    }
+
+    /// False detections on empty frames, and the pairs of contacts.
+    fn empty_and_pair_tables(&self, md: &mut String) {
+        let _ = writeln!(*md, "\n**False detections on empty frames**\n\n| method | pass | detected / frames |\n|---|---|---|");
         for (noisy, m, hits, n) in &self.false_detections {
-            let _ = writeln!(md, "| {m} | {} | {hits} / {n} |", self.pass_name(*noisy));
+            let _ = writeln!(*md, "| {m} | {} | {hits} / {n} |", self.pass_name(*noisy));
         }
-        let _ = writeln!(md, "\n**Two simultaneous contacts** (at the deepest depth, on opposite meridians, rendered as one scene)\n\n| method | pairs | something detected | mean distance to the nearer contact (mm) |\n|---|---|---|---|");
+        let _ = writeln!(*md, "\n**Two simultaneous contacts** (at the deepest depth, on opposite meridians, rendered as one scene)\n\n| method | pairs | something detected | mean distance to the nearer contact (mm) |\n|---|---|---|---|");
         for (m, pairs, found, err) in &self.two_contacts {
             let _ = writeln!(
-                md,
+                *md,
                 "| {m} | {pairs} | {found} | {} |",
                 err.map_or("—".into(), |e| format!("{e:.2}"))
             );
         }
-        md
     }
 
     /// Every trial, CSV.
