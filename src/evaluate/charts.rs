@@ -48,7 +48,10 @@ fn group_chart<'a, 'b>(
 pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<String> {
     let groups = group_names(summaries, key, order);
     let n = groups.len().max(1);
-    let what = key.trim_start_matches("by_").replace('_', " ");
+    let what = match key {
+        "by_depth" => "press depth (mm)".to_string(),
+        other => other.trim_start_matches("by_").replace('_', " "),
+    };
     let value = |s: &Value, g: &str, path: &[&str]| -> Option<f64> {
         path.iter().fold(&s[key][g], |v, p| &v[*p]).as_f64()
     };
@@ -71,7 +74,8 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
     plot::svg(&format!("by {what}"), (1000, 420), |root| {
         let (left, right) = root.split_horizontally(500);
         let caption = format!("Contacts found, by {what}");
-        let mut recall = group_chart(&left, caption, (n, &label), (105.0, "found (%)"), &what)?;
+        // Up to 125%: the legend sits above the 100% line.
+        let mut recall = group_chart(&left, caption, (n, &label), (125.0, "found (%)"), &what)?;
         let caption = format!("Error by {what} (mean, whisker to p95)");
         let mut error = group_chart(
             &right,
@@ -111,7 +115,7 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
             .configure_series_labels()
             .border_style(BLACK)
             .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::LowerLeft)
+            .position(SeriesLabelPosition::UpperLeft)
             .draw()?;
         Ok(())
     })

@@ -107,6 +107,12 @@ impl DatasetSource {
     /// Reads the set in `dir`: its manifest, its sensor and every label line, checked.
     pub fn open(dir: &Path, target: Target) -> Result<DatasetSource> {
         let what = |file: &str| dir.join(file).display().to_string();
+        if let Some(holder) = output::DirLock::holder(dir)? {
+            return Err(GeltipError::input(
+                dir.display().to_string(),
+                format!("is being written by another run ({holder}); score it once that ends"),
+            ));
+        }
         let manifest: Value = read_json(&dir.join(MANIFEST))?;
         let options = &manifest["options"];
         let config = serde_json::from_value(options["sensor_config"].clone()).map_err(|e| {
