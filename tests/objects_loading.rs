@@ -310,6 +310,65 @@ fn bad_gltf_is_refused(dir: &Path) {
     assert!(reason.contains("no triangles"), "{reason}");
 }
 
+/// glTF files the gltf crate's reader panics on (in a build with overflow checks) or
+/// misreads: each refused with a one-line reason instead.
+#[test]
+fn gltf_the_reader_cannot_take_is_refused() {
+    let dir = temp_dir("reader");
+    let (json, _) = gltf_json(&Solid::Slab.mesh(), [0.0; 3], [1.0; 3], false);
+    let cases = [
+        (
+            r#""componentType":5125,"count":36"#,
+            r#""componentType":5126,"count":36"#,
+            "indices are Scalar of F32",
+        ),
+        (
+            r#""count":8,"type":"VEC3""#,
+            r#""count":8,"type":"SCALAR""#,
+            "positions are Scalar of F32",
+        ),
+        (
+            r#""count":8,"type":"VEC3""#,
+            r#""count":0,"type":"VEC3""#,
+            "has no positions",
+        ),
+        (
+            r#""count":8,"type":"VEC3""#,
+            r#""count":4294967295,"type":"VEC3""#,
+            "positions (4294967295 of 12 bytes",
+        ),
+        (
+            r#""byteOffset":0,"byteLength":96"#,
+            r#""byteOffset":18446744073709551615,"byteLength":96"#,
+            "",
+        ),
+        (
+            r#"{"mesh":0,"scale""#,
+            r#"{"mesh":0,"children":[0],"scale""#,
+            "reached twice",
+        ),
+        (
+            r#""POSITION":0"#,
+            r#""POSITION":7"#,
+            "names accessor 7 of 2",
+        ),
+    ];
+    for (k, (from, to, says)) in cases.into_iter().enumerate() {
+        assert!(json.contains(from), "{from}");
+        let bad = json.replacen(from, to, 1);
+        let reason = invalid_reason(&dir, &format!("reader{k}.gltf"), Some(bad.as_bytes()));
+        assert!(reason.contains(says), "{to}: {reason}");
+    }
+    let mut glb = glb_bytes(&json, Vec::new());
+    glb[8..12].copy_from_slice(&4u32.to_le_bytes());
+    let reason = invalid_reason(&dir, "short.glb", Some(&glb));
+    assert!(
+        reason.contains("declares a length shorter than itself"),
+        "{reason}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A mesh far too big for the voxel size is refused by the bake, with the path.
 fn a_mesh_too_big_to_bake_is_refused(dir: &Path) {
     let big = Solid::Slab.mesh();
