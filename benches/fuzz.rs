@@ -18,26 +18,14 @@ fn main() {
         .and_then(|n| n.parse().ok())
         .unwrap_or(20_000);
     let only = value("--only");
-    println!(
-        "{:<24} {:>8} {:>8} {:>8} {:>12} {:>8} {:>8}",
-        "parser", "cases", "errors", "ok", "slowest ms", "case", "wall s"
-    );
+    println!("{}", fuzz::header());
     let mut failed = Vec::new();
     for target in fuzz::targets::all() {
         if only.as_deref().is_some_and(|o| o != target.name) {
             continue;
         }
         let r = fuzz::run(target, cases);
-        println!(
-            "{:<24} {:>8} {:>8} {:>8} {:>12.1} {:>8} {:>8.1}",
-            r.name,
-            r.cases,
-            r.refused,
-            r.accepted,
-            r.slowest.as_secs_f64() * 1e3,
-            r.slowest_case,
-            r.wall.as_secs_f64()
-        );
+        println!("{}", fuzz::row(&r));
         if !r.failures.is_empty() {
             failed.push(fuzz::describe(&r));
         }

@@ -17,7 +17,7 @@ fn check(name: &str) {
         .and_then(|n| n.parse().ok())
         .unwrap_or(target.ci_cases);
     let report = fuzz::run(target, cases);
-    println!("{}", fuzz::describe(&report));
+    println!("{}\n{}", fuzz::header(), fuzz::describe(&report));
     assert!(report.failures.is_empty(), "{}", fuzz::describe(&report));
     assert_eq!(report.cases, cases);
     // Some mutated inputs are accepted: the mutations reach the checks behind the syntax.

@@ -14,6 +14,8 @@
 
 pub mod binary;
 pub mod dictionary;
+#[path = "../object_support/gltf.rs"]
+pub mod gltf_files;
 pub mod mutate;
 pub mod seeds;
 pub mod targets;
@@ -321,10 +323,19 @@ fn work_dir(name: &str) -> PathBuf {
     dir
 }
 
-/// A one-line summary of a report, and its failures below.
-pub fn describe(r: &Report) -> String {
-    let mut s = format!(
-        "{}: {} cases, {} refused, {} accepted, slowest {:.1} ms (case {}), {:.1} s ({:.1} s making cases)",
+/// The columns of [`row`].
+pub fn header() -> String {
+    format!(
+        "{:<26} {:>7} {:>7} {:>7} {:>11} {:>7} {:>7} {:>7}",
+        "parser", "cases", "errors", "ok", "slowest ms", "case", "wall s", "make s"
+    )
+}
+
+/// A report as one row: cases, refused (errors), accepted (ok), the slowest case's time and
+/// number, the wall time and the part of it spent making the cases.
+pub fn row(r: &Report) -> String {
+    format!(
+        "{:<26} {:>7} {:>7} {:>7} {:>11.1} {:>7} {:>7.1} {:>7.1}",
         r.name,
         r.cases,
         r.refused,
@@ -333,7 +344,12 @@ pub fn describe(r: &Report) -> String {
         r.slowest_case,
         r.wall.as_secs_f64(),
         r.making.as_secs_f64()
-    );
+    )
+}
+
+/// A report's row and its failures below it.
+pub fn describe(r: &Report) -> String {
+    let mut s = row(r);
     for f in &r.failures {
         s.push_str(&format!(
             "\n  case {}: {} (input: {})",

@@ -2,6 +2,7 @@
 //! glTF and GLB files made from those meshes, PNG frames, poses and places of real contacts,
 //! and the files of a dataset directory. Also the sensors and set directories the feeds use.
 
+use super::gltf_files::{glb_bytes, gltf_json};
 use geltip::jobs::dataset::{self, Shard, Spec};
 use geltip::object::{Mesh, Object};
 use geltip::render::{Place, Press};
@@ -125,65 +126,6 @@ pub fn objs() -> Vec<Vec<u8>> {
     ]
 }
 
-/// A mesh's vertices (f32) and indices (u32) as glTF's binary buffer, and the JSON
-/// describing them (the buffer at `uri`, or the GLB's own when `uri` is None).
-fn gltf_parts(mesh: &Mesh, uri: Option<String>) -> (String, Vec<u8>) {
-    let mut bin = Vec::new();
-    for p in &mesh.positions {
-        for v in p.to_array() {
-            bin.extend_from_slice(&(v as f32).to_le_bytes());
-        }
-    }
-    let vertex_bytes = bin.len();
-    for t in &mesh.triangles {
-        for i in t {
-            bin.extend_from_slice(&i.to_le_bytes());
-        }
-    }
-    let (lo, hi) = mesh.bounds();
-    let uri = uri.map_or(String::new(), |u| format!(r#""uri": "{u}", "#));
-    let json = format!(
-        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
-"nodes": [{{"mesh": 0, "translation": [0.5, 0, 0], "scale": [1, 1, 1]}}],
-"meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "mode": 4}}]}}],
-"buffers": [{{{uri}"byteLength": {len}}}],
-"bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": {vertex_bytes}}},
-  {{"buffer": 0, "byteOffset": {vertex_bytes}, "byteLength": {index_bytes}}}],
-"accessors": [
-  {{"bufferView": 0, "componentType": 5126, "count": {n}, "type": "VEC3", "min": [{}, {}, {}], "max": [{}, {}, {}]}},
-  {{"bufferView": 1, "componentType": 5125, "count": {m}, "type": "SCALAR"}}]}}"#,
-        lo.x as f32,
-        lo.y as f32,
-        lo.z as f32,
-        hi.x as f32,
-        hi.y as f32,
-        hi.z as f32,
-        len = bin.len(),
-        index_bytes = bin.len() - vertex_bytes,
-        n = mesh.positions.len(),
-        m = mesh.triangles.len() * 3,
-    );
-    (json, bin)
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
-        for i in 0..4 {
-            if i <= c.len() {
-                out.push(ABC[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
 fn seed_meshes() -> Vec<Mesh> {
     let cone = Mesh::load(repo().join("assets/objects/cone.obj")).expect("cone.obj");
     vec![tetrahedron(), cone]
@@ -193,9 +135,9 @@ pub fn gltfs() -> Vec<Vec<u8>> {
     seed_meshes()
         .iter()
         .map(|m| {
-            let bin = gltf_parts(m, None).1;
-            let uri = format!("data:application/octet-stream;base64,{}", base64(&bin));
-            gltf_parts(m, Some(uri)).0.into_bytes()
+            gltf_json(m, [0.5, 0.0, 0.0], [1.0; 3], false)
+                .0
+                .into_bytes()
         })
         .collect()
 }
@@ -204,23 +146,8 @@ pub fn glbs() -> Vec<Vec<u8>> {
     seed_meshes()
         .iter()
         .map(|m| {
-            let (mut json, mut bin) = gltf_parts(m, None);
-            while json.len() % 4 != 0 {
-                json.push(' ');
-            }
-            while bin.len() % 4 != 0 {
-                bin.push(0);
-            }
-            let mut out = b"glTF".to_vec();
-            out.extend_from_slice(&2u32.to_le_bytes());
-            out.extend_from_slice(&((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
-            out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"JSON");
-            out.extend_from_slice(json.as_bytes());
-            out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"BIN\0");
-            out.extend_from_slice(&bin);
-            out
+            let (json, bin) = gltf_json(m, [0.5, 0.0, 0.0], [1.0; 3], true);
+            glb_bytes(&json, bin)
         })
         .collect()
 }

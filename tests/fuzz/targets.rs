@@ -8,7 +8,7 @@ use geltip::jobs::dataset;
 use geltip::localise::{self, Localiser, Method};
 use geltip::object::Mesh;
 use geltip::render::{ContactPose, Hold, Place, Press};
-use geltip::scene::{load_scene, pose_numbers};
+use geltip::scene::{load_scene, pose_numbers, At, ContactSpec};
 use geltip::Sensor;
 use glam::{DVec2, DVec3};
 use std::path::{Path, PathBuf};
@@ -160,38 +160,25 @@ fn scene_toml(dir: &Path, input: &[u8]) -> Fed {
     scene(dir, "scene.toml", input)
 }
 
+/// Every number of a hold finite (read through its spec: the place's value, the angles and
+/// depth, or the pose's 16 numbers).
 fn check_hold(hold: &Hold) -> Result<(), String> {
-    match *hold {
-        Hold::Surface {
-            place,
-            azimuth_deg,
-            spin_deg,
-            tilt_deg,
-            tilt_towards_deg,
-            depth_mm,
-        } => {
-            let (_, v) = place.key_value();
-            finite(
-                "hold",
-                &[
-                    v,
-                    azimuth_deg,
-                    spin_deg,
-                    tilt_deg,
-                    tilt_towards_deg,
-                    depth_mm,
-                ],
-            )
-        }
-        Hold::Pose {
-            world_from_object,
-            origin,
-        } => {
-            let mut v = world_from_object.to_cols_array().to_vec();
-            v.extend(origin.to_array());
-            finite("pose", &v)
-        }
+    let spec = ContactSpec::new("", hold);
+    let mut v: Vec<f64> = [
+        spec.azimuth,
+        spec.spin,
+        spec.tilt,
+        spec.tilt_towards,
+        spec.depth,
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if let Some(At::Table(place)) = &spec.at {
+        v.extend(place.values());
     }
+    v.extend(spec.pose.iter().flatten());
+    finite("hold", &v)
 }
 
 fn check_pose(p: &ContactPose) -> Result<(), String> {
