@@ -1,6 +1,8 @@
 //! The library's one error type. Every message is a single line that names what is wrong
 //! and says why, cause included: no variant reports a `source()`, so printing an error's
-//! chain (`{:#}`) shows each cause once.
+//! chain (`{:#}`) shows each cause once. Text a user gave (a name, a place, a key of a
+//! file) is written with its control characters escaped ([`OneLine`]), so that no input
+//! can break a message over lines; [`quoted`] also shortens it.
 
 use std::path::PathBuf;
 
@@ -8,50 +10,50 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum GeltipError {
     /// A sensor configuration field holds a value the sensor cannot have.
-    #[error("sensor config: {field}: {reason}")]
+    #[error("sensor config: {}: {}", OneLine(.field), OneLine(.reason))]
     InvalidConfig { field: String, reason: String },
 
     /// A sensor configuration file could not be parsed (syntax, missing or unknown key).
-    #[error("sensor config {path}: {reason}")]
+    #[error("sensor config {}: {}", OneLine(.path), OneLine(.reason))]
     ConfigParse { path: String, reason: String },
 
     /// `--sensor` named neither a preset nor a readable file.
-    #[error("unknown sensor '{name}': not a preset ({presets}) and no such file")]
+    #[error("unknown sensor '{}': not a preset ({presets}) and no such file", OneLine(.name))]
     UnknownSensor { name: String, presets: String },
 
     /// A value given on the command line or through the API is out of range.
-    #[error("{what}: {reason}")]
+    #[error("{}: {}", OneLine(.what), OneLine(.reason))]
     InvalidInput { what: String, reason: String },
 
     /// A contact's field holds a value no press can have; `field` is the name it has in
     /// [`crate::scene::ContactSpec`] (`depth`, `at`, `pose`...), so a front end can name
     /// its own flag or argument instead.
-    #[error("{field}: {reason}")]
+    #[error("{}: {}", OneLine(.field), OneLine(.reason))]
     InvalidContact { field: String, reason: String },
 
     /// A mesh file that cannot be used as an object.
-    #[error("mesh {path}: {reason}")]
+    #[error("mesh {}: {}", OneLine(.path.display()), OneLine(.reason))]
     InvalidMesh { path: PathBuf, reason: String },
 
     /// An image that cannot be used (unreadable, wrong size).
-    #[error("image {path}: {reason}")]
+    #[error("image {}: {}", OneLine(.path.display()), OneLine(.reason))]
     InvalidImage { path: PathBuf, reason: String },
 
     /// No GPU adapter (or no software Vulkan driver) could be found.
-    #[error("{0}")]
+    #[error("{}", OneLine(.0))]
     NoAdapter(String),
 
     /// The GPU device failed, ran out of memory or did not finish in time.
-    #[error("gpu: {0}")]
+    #[error("gpu: {}", OneLine(.0))]
     Gpu(String),
 
     /// A WGSL shader failed to parse or validate.
-    #[error("shader {file}: {reason}")]
+    #[error("shader {}: {}", OneLine(.file), OneLine(.reason))]
     Shader { file: String, reason: String },
 
     /// Reading or writing a file failed: the message is the path and the system's reason;
     /// `cause` keeps the error itself (its kind, its OS code).
-    #[error("{path}: {cause}")]
+    #[error("{}: {}", OneLine(.path.display()), OneLine(.cause))]
     Io {
         path: PathBuf,
         cause: std::io::Error,
@@ -93,6 +95,35 @@ impl GeltipError {
             cause,
         }
     }
+}
+
+/// Text written on one line: line breaks, tabs and other control characters as escapes
+/// (`\n`), everything else as it is.
+pub struct OneLine<T>(pub T);
+
+impl<T: std::fmt::Display> std::fmt::Display for OneLine<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use std::fmt::Write as _;
+        for c in self.0.to_string().chars() {
+            if c.is_control() {
+                write!(f, "{}", c.escape_default())?;
+            } else {
+                f.write_char(c)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A user's text for a message: in single quotes, on one line ([`OneLine`]), cut to its
+/// first 60 characters and an ellipsis when longer.
+pub fn quoted(text: &str) -> String {
+    const MAX: usize = 60;
+    let mut short: String = text.chars().take(MAX).collect();
+    if text.chars().nth(MAX).is_some() {
+        short.push_str("...");
+    }
+    format!("'{}'", OneLine(short))
 }
 
 #[cfg(test)]
@@ -157,6 +188,14 @@ mod tests {
             assert!(std::error::Error::source(&e).is_none(), "{message}");
             assert_eq!(format!("{:#}", anyhow::Error::from(e)), message);
         }
+        // Whatever a field holds (here a user's key with a line break in it), one line.
+        let e = GeltipError::input("contacts[0].line\nbreak", "unknown field\r\n");
+        assert_eq!(
+            e.to_string(),
+            "contacts[0].line\\nbreak: unknown field\\r\\n"
+        );
+        assert_eq!(quoted("s=1\ns=2"), "'s=1\\ns=2'");
+        assert_eq!(quoted(&"x".repeat(100)), format!("'{}...'", "x".repeat(60)));
         let cause = std::io::Error::from_raw_os_error(28).to_string();
         let e = GeltipError::io("/out/x.png", std::io::Error::from_raw_os_error(28));
         assert_eq!(

@@ -187,6 +187,23 @@ pub struct SensorConfig {
 /// The largest image side geltip accepts (GPU texture limits start at 8192 on some devices).
 pub const MAX_IMAGE_SIDE: u32 = 8192;
 
+/// The largest finger radius and length (mm) geltip accepts: a metre, far beyond any
+/// GelTip, and small enough that the finger's geometry stays finite (a radius of 1e308 mm
+/// squares to infinity).
+pub const MAX_FINGER_MM: f64 = 1000.0;
+
+/// A finger size: finite, positive, at most [`MAX_FINGER_MM`].
+fn finger_size(field: &str, v: f64) -> Result<()> {
+    finite_positive(field, v)?;
+    if v > MAX_FINGER_MM {
+        return Err(GeltipError::config(
+            field,
+            format!("must be at most {MAX_FINGER_MM} mm, got {v}"),
+        ));
+    }
+    Ok(())
+}
+
 fn finite_positive(field: &str, v: f64) -> Result<()> {
     if !v.is_finite() {
         return Err(GeltipError::config(
@@ -236,8 +253,8 @@ impl SensorConfig {
     /// Checks every field against what a real sensor can be; the error names the field.
     pub fn validate(&self) -> Result<()> {
         let f = &self.finger;
-        finite_positive("finger.radius_mm", f.radius_mm)?;
-        finite_positive("finger.cylinder_length_mm", f.cylinder_length_mm)?;
+        finger_size("finger.radius_mm", f.radius_mm)?;
+        finger_size("finger.cylinder_length_mm", f.cylinder_length_mm)?;
         finite_positive("finger.shell_thickness_mm", f.shell_thickness_mm)?;
         if f.shell_thickness_mm >= f.radius_mm {
             return Err(GeltipError::config(

@@ -40,6 +40,18 @@ fn non_positive_radius() {
 }
 
 #[test]
+fn a_finger_too_big_to_compute_with() {
+    for r in [1e308, 2e245, 1001.0] {
+        let mut c = common::paper_config();
+        c.finger.radius_mm = r;
+        assert_refused(c, "finger.radius_mm: must be at most 1000 mm");
+        let mut c = common::paper_config();
+        c.finger.cylinder_length_mm = r;
+        assert_refused(c, "finger.cylinder_length_mm: must be at most 1000 mm");
+    }
+}
+
+#[test]
 fn nan_and_infinite_fields() {
     let mut c = common::paper_config();
     c.finger.radius_mm = f64::NAN;

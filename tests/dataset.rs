@@ -333,6 +333,45 @@ fn torn_line_and_missing_file_are_redone() {
     assert!(files(&out) == before);
 }
 
+/// A shard's manifest naming no shard of its set (an index past the count, a count of 0)
+/// is refused by a merge with a one-line error, whichever shard it is given as.
+#[test]
+fn merge_refuses_a_manifest_that_names_no_shard() {
+    let root = scratch("no-shard");
+    let manifest = |shard: [u64; 2]| {
+        serde_json::json!({"geltip_version": "0", "options": {"count": 2}, "shard": shard})
+            .to_string()
+    };
+    for (k, bad) in [[0, 0], [u64::MAX, 2], [2, 2]].into_iter().enumerate() {
+        for bad_first in [true, false] {
+            let (a, b) = (
+                root.join(format!("{k}{bad_first}a")),
+                root.join(format!("{k}{bad_first}b")),
+            );
+            let (first, second) = if bad_first {
+                (bad, [1, 2])
+            } else {
+                ([0, 2], bad)
+            };
+            for (dir, shard) in [(&a, first), (&b, second)] {
+                fs::create_dir_all(dir).unwrap();
+                fs::write(dir.join("dataset.json"), manifest(shard)).unwrap();
+                // The good shard complete: its sample's line and file.
+                fs::create_dir_all(dir.join("images")).unwrap();
+                fs::write(dir.join("images/000000.png"), b"png").unwrap();
+                let line = r#"{"index": 0, "image": "images/000000.png"}"#;
+                fs::write(dir.join("labels.jsonl"), format!("{line}\n")).unwrap();
+            }
+            let out = root.join(format!("{k}{bad_first}out"));
+            let e = ::geltip::jobs::dataset::merge(&out, &[a, b], &[])
+                .unwrap_err()
+                .to_string();
+            let named = format!("names shard {}/{}", bad[0], bad[1]);
+            assert!(e.contains(&named) && !e.contains('\n'), "{bad:?}: {e}");
+        }
+    }
+}
+
 #[test]
 fn bad_input_gives_one_line_errors() {
     let root = scratch("errors");

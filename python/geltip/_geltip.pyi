@@ -1,4 +1,4 @@
-"""Type stubs of the native module (python/src/lib.rs)."""
+"""Type stubs of the native module (python/src/)."""
 import os
 from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
 
@@ -76,7 +76,7 @@ class Simulator:
         streams: int = 1,
     ) -> None:
         """`objects`: solids or mesh files to load (meshes are baked) now rather than on
-        first use. `streams` (1..4): renderers on devices of their own that `render_batch`
+        first use. `streams` (1..=4): renderers on devices of their own that `render_batch`
         shares its submissions between, at the same time (the same frames, faster on a
         software rasteriser, which leaves cores idle within one stream)."""
     @property
@@ -110,7 +110,7 @@ class Simulator:
         self, contacts: Sequence[Mapping[str, Any]]
     ) -> Tuple[_Image, Labels, _Depth]:
         """Several contacts in one frame (`geltip render --scene`); each dict takes
-        `render`'s keyword names."""
+        `render`'s keyword names. An error names the contact: `contacts[1].depth: ...`."""
     def render_batch(
         self,
         contacts: Sequence[Mapping[str, Any]],
@@ -119,9 +119,10 @@ class Simulator:
         out: Optional[npt.NDArray[np.uint8]] = None,
         depth_out: Optional[npt.NDArray[np.float32]] = None,
     ) -> Tuple[npt.NDArray[np.uint8], List[Labels], Optional[npt.NDArray[np.float32]]]:
-        """Many contacts (dicts of `render`'s keyword names, without tilt or pose), batched
-        on the GPU -> (images (N, H, W, 3) uint8, [labels], depth maps (N, H, W) float32 or
-        None with depth_maps=False). Frames are written straight into the arrays; pass
+        """Many contacts (dicts of `render`'s keyword names), batched on the GPU -> (images
+        (N, H, W, 3) uint8, [labels], depth maps (N, H, W) float32 or None with
+        depth_maps=False). Every contact is checked before any renders; an error names it
+        (`contacts[1].depth: ...`). Frames are written straight into the arrays; pass
         `out`/`depth_out` (C-contiguous, of those shapes) to reuse your own."""
 
 def localise(

@@ -50,7 +50,7 @@ def test_no_contact_is_a_result(sim, sensor):
 
 def test_localise_bad_arguments(sim, sensor):
     reference = sim.reference()
-    with pytest.raises(ValueError, match="^image: expected a \\(480, 640, 3\\) uint8"):
+    with pytest.raises(ValueError, match="^frame: is 640x100 but the reference is 640x480"):
         geltip.localise(sensor, reference, reference[:100])
     with pytest.raises(ValueError, match="^image: expected .* dtype float64"):
         geltip.localise(sensor, reference, reference.astype(np.float64))

@@ -7,7 +7,7 @@ use geltip::object::ObjectCache;
 use geltip::output;
 use geltip::render::gpu::Renderer;
 use geltip::render::{Frame, Press};
-use geltip::scene::{load_scene, At, ContactSpec};
+use geltip::scene::{load_scene, pose_numbers, At, ContactSpec};
 use geltip::sensor::Sensor;
 use geltip::GeltipError;
 use serde_json::json;
@@ -110,7 +110,7 @@ impl RenderArgs {
         if let Some(text) = &self.pose {
             return Ok(ContactSpec {
                 object,
-                pose: Some(pose_numbers(text)?),
+                pose: Some(pose_numbers(text).map_err(under_flag)?),
                 ..ContactSpec::default()
             });
         }
@@ -146,17 +146,6 @@ fn under_flag(e: GeltipError) -> anyhow::Error {
         }
         other => other.into(),
     }
-}
-
-/// `--pose`'s numbers, separated by commas or spaces.
-fn pose_numbers(text: &str) -> Result<Vec<f64>> {
-    text.split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|t| !t.is_empty())
-        .map(|t| {
-            t.parse::<f64>()
-                .map_err(|_| anyhow!("--pose: '{t}' is not a number"))
-        })
-        .collect()
 }
 
 fn write_frame(frame: &Frame, args: &RenderArgs) -> Result<()> {

@@ -4,6 +4,7 @@
 
 use crate::error::{GeltipError, Result};
 use glam::{DMat4, DVec3};
+use gltf::accessor::{DataType, Dimensions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -305,15 +306,23 @@ fn load_obj(bytes: &[u8]) -> std::result::Result<Mesh, String> {
 
 /// Positions and triangles of every triangle primitive in a glTF/GLB, node transforms applied.
 fn load_gltf(bytes: &[u8], base: Option<&Path>) -> std::result::Result<Mesh, String> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format!("cannot parse glTF: {e}"))?;
+    // The gltf crate subtracts the header's size from the length a GLB declares unchecked.
+    let declared = bytes
+        .get(8..12)
+        .map(|l| u32::from_le_bytes([l[0], l[1], l[2], l[3]]));
+    if bytes.starts_with(b"glTF") && declared.is_some_and(|l| l < 12) {
+        return Err(
+            "cannot parse glTF: the GLB header declares a length shorter than itself".into(),
+        );
+    }
+    let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| format!("cannot parse glTF: {e}"))?;
+    let root = unchecked.document.into_json();
+    check_attribute_indices(&root)?;
+    let doc = &gltf::Document::from_json(root).map_err(|e| format!("cannot parse glTF: {e}"))?;
     let base = base.filter(|b| !b.as_os_str().is_empty());
-    let buffers = gltf::import_buffers(
-        &gltf.document,
-        Some(base.unwrap_or(Path::new("."))),
-        gltf.blob,
-    )
-    .map_err(|e| format!("cannot read glTF buffers: {e}"))?;
-    let doc = &gltf.document;
+    let buffers = gltf::import_buffers(doc, Some(base.unwrap_or(Path::new("."))), unchecked.blob)
+        .map_err(|e| format!("cannot read glTF buffers: {e}"))?;
     let mut mesh = Mesh::default();
     let mut stack: Vec<(gltf::Node, DMat4)> = Vec::new();
     let roots: Vec<gltf::Node> = match doc.default_scene() {
@@ -328,11 +337,15 @@ fn load_gltf(bytes: &[u8], base: Option<&Path>) -> std::result::Result<Mesh, Str
         }
     };
     stack.extend(roots.into_iter().map(|n| (n, DMat4::IDENTITY)));
-    let mut visited = 0usize;
+    // The nodes form trees (the spec's rule): a node reached twice is a cycle or a shared
+    // child, whose meshes would be added again and again.
+    let mut visited = vec![false; doc.nodes().len()];
     while let Some((node, parent)) = stack.pop() {
-        visited += 1;
-        if visited > 1_000_000 {
-            return Err("glTF node hierarchy too deep or cyclic".into());
+        if std::mem::replace(&mut visited[node.index()], true) {
+            return Err(format!(
+                "glTF node {} is reached twice: the node hierarchy must be a tree",
+                node.index()
+            ));
         }
         let local = node.transform().matrix().map(|c| c.map(f64::from));
         let world = parent * DMat4::from_cols_array_2d(&local);
@@ -342,6 +355,75 @@ fn load_gltf(bytes: &[u8], base: Option<&Path>) -> std::result::Result<Mesh, Str
         stack.extend(node.children().map(|c| (c, world)));
     }
     Ok(mesh)
+}
+
+/// Refuses a primitive attribute naming an accessor that does not exist: the gltf crate's
+/// validation indexes the accessors by it unchecked.
+fn check_attribute_indices(root: &gltf::json::Root) -> std::result::Result<(), String> {
+    let n = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = prim.attributes.values().find(|i| i.value() >= n) {
+                return Err(format!(
+                    "cannot parse glTF: mesh {m} primitive {p} names accessor {} of {n}",
+                    index.value()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses an accessor that the gltf crate's reader would panic on or misread: of a type
+/// other than `types` and `dims`, sparse, empty, or reaching past its buffer view or its
+/// view past its buffer.
+fn check_accessor(
+    label: &str,
+    role: &str,
+    a: &gltf::Accessor,
+    types: &[DataType],
+    dims: Dimensions,
+    buffers: &[gltf::buffer::Data],
+) -> std::result::Result<(), String> {
+    if !types.contains(&a.data_type()) || a.dimensions() != dims {
+        return Err(format!(
+            "{label}'s {role} are {:?} of {:?}, expected {dims:?} of {types:?}",
+            a.dimensions(),
+            a.data_type()
+        ));
+    }
+    if a.sparse().is_some() {
+        return Err(format!(
+            "{label}'s {role} are sparse, which is not supported"
+        ));
+    }
+    let view = a
+        .view()
+        .ok_or_else(|| format!("{label}'s {role} have no buffer view"))?;
+    if a.count() == 0 {
+        return Err(format!("{label} has no {role}"));
+    }
+    let size = a.size();
+    let stride = view.stride().unwrap_or(size);
+    let end = (a.count() - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(a.offset()))
+        .and_then(|x| x.checked_add(size));
+    let buffer_len = buffers.get(view.buffer().index()).map_or(0, |b| b.0.len());
+    let view_end = view.offset().checked_add(view.length());
+    if stride < size
+        || end.is_none_or(|e| e > view.length())
+        || view_end.is_none_or(|e| e > buffer_len)
+    {
+        return Err(format!(
+            "{label}'s {role} ({} of {size} bytes, {stride} apart, from byte {}) do not fit their buffer view ({} bytes from byte {} of a {buffer_len}-byte buffer)",
+            a.count(),
+            a.offset(),
+            view.length(),
+            view.offset()
+        ));
+    }
+    Ok(())
 }
 
 /// Appends the triangle primitives of one glTF mesh, transformed by `world`.
@@ -357,6 +439,28 @@ fn add_gltf_mesh(
             continue;
         }
         let label = format!("mesh {} primitive {}", m.index(), prim.index());
+        let positions = prim
+            .get(&gltf::Semantic::Positions)
+            .ok_or_else(|| format!("{label} has no readable positions"))?;
+        check_accessor(
+            &label,
+            "positions",
+            &positions,
+            &[DataType::F32],
+            Dimensions::Vec3,
+            buffers,
+        )?;
+        if let Some(indices) = prim.indices() {
+            let types = [DataType::U8, DataType::U16, DataType::U32];
+            check_accessor(
+                &label,
+                "indices",
+                &indices,
+                &types,
+                Dimensions::Scalar,
+                buffers,
+            )?;
+        }
         let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<DVec3> = reader
             .read_positions()

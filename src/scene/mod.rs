@@ -16,5 +16,5 @@ pub mod pose;
 pub mod spec;
 
 pub use place::{Place, PLACE_KEYS};
-pub use pose::{ContactPose, Hold, Press};
-pub use spec::{load_scene, naming_contact, At, ContactSpec};
+pub use pose::{pose_numbers, ContactPose, Hold, Press};
+pub use spec::{load_scene, naming_contact, presses, At, ContactSpec};

@@ -1,7 +1,7 @@
 //! Where on the finger a contact is placed: the paper's rotation about the tip, its
 //! translation along the side, or arc length from the tip.
 
-use crate::error::{GeltipError, Result};
+use crate::error::{quoted, GeltipError, Result};
 use crate::sensor::Sensor;
 
 /// Where on the finger a contact is placed.
@@ -25,16 +25,19 @@ impl Place {
     /// Parses the text form `rotation=<deg>`, `translation=<mm>` or `s=<mm>`. Errors name the
     /// contact field `at`.
     pub fn parse(text: &str) -> Result<Place> {
-        let (key, value) = text
-            .split_once('=')
-            .ok_or_else(|| GeltipError::contact("at", format!("{EXPECTED}, got '{text}'")))?;
+        let (key, value) = text.split_once('=').ok_or_else(|| {
+            GeltipError::contact("at", format!("{EXPECTED}, got {}", quoted(text)))
+        })?;
         let v: f64 = value.trim().parse().map_err(|_| {
-            GeltipError::contact("at", format!("the value of '{text}' is not a number"))
+            GeltipError::contact(
+                "at",
+                format!("the value of {} is not a number", quoted(text)),
+            )
         })?;
         if !PLACE_KEYS.contains(&key.trim()) {
             return Err(GeltipError::contact(
                 "at",
-                format!("{EXPECTED}, got '{text}'"),
+                format!("{EXPECTED}, got {}", quoted(text)),
             ));
         }
         Place::from_key(key.trim(), v)
@@ -54,7 +57,10 @@ impl Place {
             "s" => Ok(Place::ArcLength(value)),
             _ => Err(GeltipError::contact(
                 "at",
-                format!("unknown place '{key}', expected rotation, translation or s"),
+                format!(
+                    "unknown place {}, expected rotation, translation or s",
+                    quoted(key)
+                ),
             )),
         }
     }
@@ -109,9 +115,16 @@ mod tests {
             ),
             ("s=inf", "s must be a finite number, got inf"),
             ("rotation=NaN", "rotation must be a finite number"),
+            // Text echoed on one line, shortened.
+            ("s=12.5\ns=12.5", "the value of 's=12.5\\ns=12.5' is not"),
+            (
+                "rotation=1".repeat(100).as_str(),
+                "the value of 'rotation=1rotation=1",
+            ),
         ] {
             let e = Place::parse(bad).unwrap_err().to_string();
             assert!(e.starts_with("at: ") && e.contains(says), "{bad}: {e}");
+            assert!(!e.contains('\n') && e.len() < 200, "{bad}: {e}");
         }
         for p in [
             Place::Rotation(-3.5),

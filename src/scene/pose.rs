@@ -4,7 +4,7 @@
 
 use super::first_touch::{first_touch, touching_offset, FirstTouch};
 use super::Place;
-use crate::error::{GeltipError, Result};
+use crate::error::{quoted, GeltipError, Result};
 use crate::finger::{Finger, Region, SurfaceCoord, SurfacePoint};
 use crate::object::Object;
 use crate::render::contact::max_trace_depth;
@@ -91,6 +91,19 @@ impl ContactPose {
         );
         m.transpose().to_cols_array()
     }
+}
+
+/// The numbers of a pose given as text (`--pose`, or a string in Python): separated by
+/// commas or whitespace. Errors name the contact field `pose`; [`Hold::from_pose`] checks
+/// how many there are and what they describe.
+pub fn pose_numbers(text: &str) -> Result<Vec<f64>> {
+    text.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| {
+            t.parse::<f64>()
+                .map_err(|_| GeltipError::contact("pose", format!("{} is not a number", quoted(t))))
+        })
+        .collect()
 }
 
 impl Hold {

@@ -4,7 +4,7 @@
 
 use super::{Hold, Place, Press, PLACE_KEYS};
 use crate::error::{GeltipError, Result};
-use crate::object::ObjectCache;
+use crate::object::{ObjectCache, Solid};
 use crate::sensor::Sensor;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -174,11 +174,47 @@ impl ContactSpec {
     /// it fits a sensor's finger is [`Press::pose`]'s to say.
     pub fn press(&self, objects: &mut ObjectCache) -> Result<Press> {
         let hold = self.hold()?;
+        if self.object.is_empty() {
+            return Err(GeltipError::contact(
+                "object",
+                format!(
+                    "required: a built-in solid ({}) or a mesh file (.obj, .gltf, .glb)",
+                    Solid::ALL
+                        .iter()
+                        .chain(&Solid::EXTRA)
+                        .map(|s| s.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
         Ok(Press {
             object: objects.get(&self.object)?,
             hold,
         })
     }
+}
+
+/// The presses of a list of specs, objects loaded through `objects` (each once), each
+/// placed on `sensor`'s finger when one is given ([`Press::pose`]). An error names the
+/// contact (`contacts[1].depth: ...`, see [`naming_contact`]).
+pub fn presses(
+    specs: &[ContactSpec],
+    objects: &mut ObjectCache,
+    sensor: Option<&Sensor>,
+) -> Result<Vec<Press>> {
+    let mut presses = Vec::with_capacity(specs.len());
+    for (k, spec) in specs.iter().enumerate() {
+        let press = spec
+            .press(objects)
+            .and_then(|p| match sensor {
+                Some(sensor) => p.pose(sensor).map(|_| p),
+                None => Ok(p),
+            })
+            .map_err(|e| naming_contact(e, k))?;
+        presses.push(press);
+    }
+    Ok(presses)
 }
 
 /// An error about contact `k` of a list, named as a list's element: a field's as
@@ -208,16 +244,8 @@ pub fn load_scene(path: &Path, sensor: &Sensor) -> Result<Vec<Press>> {
     if file.contacts.is_empty() {
         return Err(in_file("lists no contacts".into()));
     }
-    let mut objects = ObjectCache::default();
-    let mut presses = Vec::with_capacity(file.contacts.len());
-    for (k, spec) in file.contacts.iter().enumerate() {
-        let press = spec
-            .press(&mut objects)
-            .and_then(|p| p.pose(sensor).map(|_| p))
-            .map_err(|e| in_file(naming_contact(e, k).to_string()))?;
-        presses.push(press);
-    }
-    Ok(presses)
+    presses(&file.contacts, &mut ObjectCache::default(), Some(sensor))
+        .map_err(|e| in_file(e.to_string()))
 }
 
 /// A scene file's contents, or a one-line reason naming the field (`contacts[1].at: ...`).
@@ -336,6 +364,47 @@ mod tests {
             .to_string();
         assert!(e.contains("or a table such as {rotation = 30}"), "{e}");
         assert!(serde_json::from_str::<ContactSpec>(r#"{"object": "sphere", "dpth": 1}"#).is_err());
+    }
+
+    #[test]
+    fn a_list_names_the_contact_at_fault() {
+        let specs = [
+            spec(r#"{"object": "sphere", "at": "rotation=30", "depth": 1}"#),
+            spec(r#"{"object": "sphere", "at": "rotation=30", "depth": -1}"#),
+        ];
+        let mut objects = ObjectCache::default();
+        assert_eq!(presses(&specs[..1], &mut objects, None).unwrap().len(), 1);
+        let e = presses(&specs, &mut objects, None).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "contacts[1].depth: a press depth cannot be negative, got -1 mm"
+        );
+        let nameless = spec(r#"{"object": "", "at": "rotation=30", "depth": 1}"#);
+        let e = presses(&[nameless], &mut objects, None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("contacts[0].object: required"), "{e}");
+        let e = presses(
+            &[spec(r#"{"object": "pear", "at": "s=1", "depth": 1}"#)],
+            &mut objects,
+            None,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("contacts[0]: object 'pear': not a built-in solid"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn pose_text_is_numbers_by_commas_or_spaces() {
+        assert_eq!(
+            crate::scene::pose_numbers(" 1,2  3,\t4 ").unwrap(),
+            vec![1.0, 2.0, 3.0, 4.0]
+        );
+        let e = crate::scene::pose_numbers("1, x").unwrap_err().to_string();
+        assert_eq!(e, "pose: 'x' is not a number");
     }
 
     #[test]

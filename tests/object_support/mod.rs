@@ -2,6 +2,8 @@
 //! temporary folders, repository paths.
 #![allow(dead_code)]
 
+pub mod gltf;
+
 use geltip::object::Solid;
 use glam::DVec3;
 use std::path::{Path, PathBuf};

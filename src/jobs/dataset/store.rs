@@ -289,6 +289,12 @@ impl ShardSet {
                 format!("{MANIFEST} has no shard i/n"),
             ));
         };
+        if i >= n {
+            return Err(GeltipError::input(
+                what(),
+                format!("{MANIFEST} names shard {i}/{n}, which is none of 0..{n}"),
+            ));
+        }
         if *self.count.get_or_insert(n) != n {
             return Err(GeltipError::input(
                 what(),

@@ -1,0 +1,44 @@
+//! `geltip.localise` and `geltip.load_image`: finding a contact in a frame, reading frames.
+
+use crate::convert::{json_to_py, path_or_str, rgb_image};
+use crate::errors::{detached, lib};
+use crate::sensor::Sensor;
+use geltip::localise::Method;
+use numpy::{PyArray, PyArray3, PyArrayMethods};
+use pyo3::prelude::*;
+
+/// Finds the contact in `image` against `reference` (both (H, W, 3) uint8 of the sensor's
+/// size): `{"detected", "pixel", "point", "region", "confidence", "regions_found", "note"}`,
+/// as `geltip localise` prints.
+#[pyfunction]
+#[pyo3(signature = (sensor, reference, image, method = "surface"))]
+pub fn localise<'py>(
+    py: Python<'py>,
+    sensor: &Bound<'py, Sensor>,
+    reference: &Bound<'py, PyAny>,
+    image: &Bound<'py, PyAny>,
+    method: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let s = sensor.get();
+    let method = lib(Method::from_name(method))?;
+    let reference = rgb_image("reference", reference)?;
+    let image = rgb_image("image", image)?;
+    let detection = detached(py, "localising", || {
+        s.localiser.localise(&reference, &image, method)
+    })?;
+    json_to_py(py, &detection.to_json())
+}
+
+/// Reads an image file (PNG) as an (H, W, 3) uint8 array.
+#[pyfunction]
+pub fn load_image<'py>(
+    py: Python<'py>,
+    path: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let path = path_or_str("path", path)?;
+    let img = detached(py, "reading an image", || {
+        geltip::localise::load_image(&path)
+    })?;
+    let (w, h) = img.dimensions();
+    PyArray::from_vec(py, img.into_raw()).reshape([h as usize, w as usize, 3])
+}

@@ -1,0 +1,268 @@
+//! Real valid inputs to start from: the presets, the scene files and meshes in the tree,
+//! glTF and GLB files made from those meshes, PNG frames, poses and places of real contacts,
+//! and the files of a dataset directory. Also the sensors and set directories the feeds use.
+
+use super::gltf_files::{glb_bytes, gltf_json};
+use geltip::jobs::dataset::{self, Shard, Spec};
+use geltip::object::{Mesh, Object};
+use geltip::render::{Place, Press};
+use geltip::sensor::{Sensor, PRESETS};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+/// The repository's root.
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn read(rel: &str) -> Vec<u8> {
+    std::fs::read(repo().join(rel)).unwrap_or_else(|e| panic!("seed {rel}: {e}"))
+}
+
+/// The paper's sensor.
+pub fn paper() -> &'static Sensor {
+    static S: OnceLock<Sensor> = OnceLock::new();
+    S.get_or_init(|| Sensor::preset("paper").expect("the paper preset"))
+}
+
+/// The paper's finger and lens on a 64x48 image: frames to localise and backgrounds cost
+/// little.
+pub fn small_toml() -> String {
+    let paper = PRESETS[0].1;
+    paper
+        .replace("focal_px = 180.0", "focal_px = 18.0")
+        .replace("cx = 320.0", "cx = 32.0")
+        .replace("cy = 240.0", "cy = 24.0")
+        .replace("width = 640", "width = 64")
+        .replace("height = 480", "height = 48")
+}
+
+pub fn small() -> &'static Sensor {
+    static S: OnceLock<Sensor> = OnceLock::new();
+    S.get_or_init(|| Sensor::from_toml("small", &small_toml()).expect("the small sensor"))
+}
+
+pub fn sensor_tomls() -> Vec<Vec<u8>> {
+    let mut seeds: Vec<Vec<u8>> = PRESETS.iter().map(|(_, t)| t.as_bytes().to_vec()).collect();
+    seeds.push(small_toml().into_bytes());
+    seeds
+}
+
+/// A real contact's pose as a row-major 4x4 matrix.
+fn pose_of(object: &str, place: Place, azimuth: f64, depth: f64) -> [f64; 16] {
+    let object = Arc::new(Object::from_arg(object).expect("a solid"));
+    Press::at(object, place, azimuth, depth)
+        .pose(paper())
+        .expect("a contact the finger takes")
+        .matrix_row_major()
+}
+
+fn numbers(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+pub fn scene_jsons() -> Vec<Vec<u8>> {
+    let pose = pose_of("cone", Place::Rotation(40.0), 120.0, 0.8);
+    let with_all = format!(
+        r#"{{"contacts": [
+  {{"object": "sphere", "at": {{"rotation": 30}}, "azimuth": 10, "spin": 5, "tilt": 20, "tilt_towards": 90, "depth": 1}},
+  {{"object": "cone", "pose": [{}]}}
+]}}"#,
+        numbers(&pose)
+    );
+    vec![
+        read("docs/images/scene_sphere_torus.json"),
+        with_all.into_bytes(),
+    ]
+}
+
+pub fn scene_tomls() -> Vec<Vec<u8>> {
+    let pose = pose_of("edge", Place::Translation(5.0), 200.0, 0.5);
+    let text = format!(
+        r#"[[contacts]]
+object = "sphere"
+at = "rotation=30"
+depth = 1.0
+
+[[contacts]]
+object = "torus"
+at = {{ translation = 8 }}
+azimuth = 180.0
+spin = 15.0
+tilt = 10.0
+tilt_towards = 90.0
+depth = 0.6
+
+[[contacts]]
+object = "edge"
+pose = [{}]
+"#,
+        numbers(&pose)
+    );
+    vec![text.into_bytes()]
+}
+
+/// A small tetrahedron, wound outward.
+fn tetrahedron() -> Mesh {
+    Mesh {
+        positions: vec![
+            glam::DVec3::new(0.0, 0.0, 0.0),
+            glam::DVec3::new(2.0, 0.0, -2.0),
+            glam::DVec3::new(-1.0, 1.7, -2.0),
+            glam::DVec3::new(-1.0, -1.7, -2.0),
+        ],
+        triangles: vec![[0, 2, 1], [0, 3, 2], [0, 1, 3], [1, 2, 3]],
+    }
+}
+
+pub fn objs() -> Vec<Vec<u8>> {
+    vec![
+        tetrahedron().to_obj_string().into_bytes(),
+        read("assets/objects/cone.obj"),
+        read("assets/objects/edge.obj"),
+    ]
+}
+
+fn seed_meshes() -> Vec<Mesh> {
+    let cone = Mesh::load(repo().join("assets/objects/cone.obj")).expect("cone.obj");
+    vec![tetrahedron(), cone]
+}
+
+pub fn gltfs() -> Vec<Vec<u8>> {
+    seed_meshes()
+        .iter()
+        .map(|m| {
+            gltf_json(m, [0.5, 0.0, 0.0], [1.0; 3], false)
+                .0
+                .into_bytes()
+        })
+        .collect()
+}
+
+pub fn glbs() -> Vec<Vec<u8>> {
+    seed_meshes()
+        .iter()
+        .map(|m| {
+            let (json, bin) = gltf_json(m, [0.5, 0.0, 0.0], [1.0; 3], true);
+            glb_bytes(&json, bin)
+        })
+        .collect()
+}
+
+/// PNG bytes of an image.
+fn png_of(image: image::DynamicImage) -> Vec<u8> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    image
+        .write_to(&mut out, image::ImageFormat::Png)
+        .expect("PNG encoding");
+    out.into_inner()
+}
+
+/// Frames of `w` x `h` in the pixel formats PNG files come in: RGB, RGBA, grey, 16-bit.
+fn frames(w: u32, h: u32) -> Vec<Vec<u8>> {
+    let rgb = image::RgbImage::from_fn(w, h, |x, y| {
+        image::Rgb([(x * 4) as u8, (y * 5) as u8, ((x + y) * 3) as u8])
+    });
+    let dynamic = image::DynamicImage::ImageRgb8(rgb);
+    vec![
+        png_of(dynamic.clone()),
+        png_of(image::DynamicImage::ImageRgba8(dynamic.to_rgba8())),
+        png_of(image::DynamicImage::ImageLuma8(dynamic.to_luma8())),
+        png_of(image::DynamicImage::ImageRgb16(dynamic.to_rgb16())),
+    ]
+}
+
+pub fn pngs() -> Vec<Vec<u8>> {
+    let mut seeds = frames(9, 7);
+    seeds.push(read("tests/reference/paper_sphere_rot45.png"));
+    seeds
+}
+
+/// Frames of the small sensor's size.
+pub fn small_frames() -> Vec<Vec<u8>> {
+    frames(small().width, small().height)
+}
+
+pub fn pose_texts() -> Vec<Vec<u8>> {
+    let m = pose_of("sphere", Place::Rotation(45.0), 60.0, 1.0);
+    let r = glam::DMat3::from_cols_array(&[m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]]);
+    let q = glam::DQuat::from_mat3(&r);
+    let seven = [m[3], m[7], m[11], q.w, q.x, q.y, q.z];
+    vec![
+        numbers(&m).into_bytes(),
+        seven.map(|v| v.to_string()).join(" ").into_bytes(),
+    ]
+}
+
+pub fn place_texts() -> Vec<Vec<u8>> {
+    ["rotation=30", "translation=5", "s=12.5", " rotation = 90 "]
+        .map(|s| s.as_bytes().to_vec())
+        .to_vec()
+}
+
+/// A dataset spec of the small sensor whose shard holds no sample: a run checks the
+/// directory (manifest, labels, background) and renders nothing.
+pub fn empty_shard_spec(background: Option<PathBuf>) -> Spec {
+    let mut spec = Spec::new("small", small().clone(), 1, 7);
+    spec.objects = vec!["sphere".into()];
+    spec.shard = Shard { index: 0, count: 2 };
+    spec.background = background;
+    spec.workers = 1;
+    spec.streams = 1;
+    spec
+}
+
+/// The manifest a run of [`empty_shard_spec`] writes.
+pub fn resume_manifest() -> Vec<u8> {
+    static M: OnceLock<Vec<u8>> = OnceLock::new();
+    M.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("geltip-fuzz-manifest-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        dataset::run(&empty_shard_spec(None), Some(&dir), |_| {}).expect("an empty shard");
+        let text = std::fs::read(dir.join(dataset::MANIFEST)).expect("its manifest");
+        let _ = std::fs::remove_dir_all(&dir);
+        text
+    })
+    .clone()
+}
+
+/// A label line of sample `k` (a real render's labels, with the sample's index and files).
+pub fn label_line(k: u64) -> String {
+    let text = std::fs::read_to_string(repo().join("docs/images/sphere_translation5.json"))
+        .expect("a label file");
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("labels");
+    v["index"] = k.into();
+    v["image"] = format!("images/{k:06}.png").into();
+    v["mask"] = format!("masks/{k:06}.png").into();
+    v.to_string()
+}
+
+pub fn labels_jsonl() -> Vec<Vec<u8>> {
+    vec![format!("{}\n{}\n", label_line(0), label_line(1)).into_bytes()]
+}
+
+/// The manifest of shard `i` of 2 of a two-sample set.
+pub fn shard_manifest(i: u64) -> Vec<u8> {
+    serde_json::json!({
+        "geltip_version": env!("CARGO_PKG_VERSION"),
+        "options": {"count": 2, "seed": 7, "sensor": "paper", "objects": ["sphere"]},
+        "shard": [i, 2],
+        "shard_range": [i, i + 1],
+        "command": ["geltip", "dataset", "--shard", format!("{i}/2")],
+    })
+    .to_string()
+    .into_bytes()
+}
+
+/// Writes shard `i` of 2 into `dir`: its manifest, label line and files.
+pub fn write_shard(dir: &Path, i: u64, manifest: &[u8], labels: &[u8]) {
+    for sub in ["images", "masks"] {
+        std::fs::create_dir_all(dir.join(sub)).expect("a shard directory");
+        std::fs::write(dir.join(format!("{sub}/{i:06}.png")), b"png").expect("a file");
+    }
+    std::fs::write(dir.join(dataset::MANIFEST), manifest).expect("a manifest");
+    std::fs::write(dir.join(dataset::LABELS), labels).expect("labels");
+}
