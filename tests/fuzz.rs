@@ -104,6 +104,16 @@ fn merge_labels_jsonl() {
     check("merge labels.jsonl");
 }
 
+#[test]
+fn evaluate_predictions_jsonl() {
+    check("evaluate predictions.jsonl");
+}
+
+#[test]
+fn evaluate_detector_answer() {
+    check("evaluate detector answer");
+}
+
 /// Every target in the table has a test above.
 #[test]
 fn every_target_is_tested() {

@@ -257,6 +257,14 @@ impl Predictions {
         })
     }
 
+    /// The detections it gives frame `k` (none when it names no such frame).
+    pub fn detections_of(&self, k: u64) -> Vec<Found> {
+        self.by_sample
+            .get(&k)
+            .map(|(_, found)| found.clone())
+            .unwrap_or_default()
+    }
+
     /// How many frames it gives detections for.
     pub fn len(&self) -> usize {
         self.by_sample.len()

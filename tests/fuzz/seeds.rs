@@ -266,3 +266,27 @@ pub fn write_shard(dir: &Path, i: u64, manifest: &[u8], labels: &[u8]) {
     std::fs::write(dir.join(dataset::MANIFEST), manifest).expect("a manifest");
     std::fs::write(dir.join(dataset::LABELS), labels).expect("labels");
 }
+
+/// Predictions files for a set of four frames: pixels, points, confidences, empty frames.
+pub fn predictions_jsonl() -> Vec<Vec<u8>> {
+    vec![
+        concat!(
+            "{\"sample\": 0, \"detections\": [{\"pixel\": [400.0, 240.0], \"confidence\": 0.9}]}\n",
+            "{\"sample\": 1, \"detections\": []}\n",
+            "{\"sample\": 2, \"detections\": [{\"point\": [7.5, 0.0, 15.75]}, {\"pixel\": [320, 240], \"confidence\": 0.1}]}\n",
+            "{\"sample\": 3, \"detections\": [{\"point\": [0.0, 0.0, 27.5], \"pixel\": [320.0, 240.0], \"confidence\": 1}]}\n",
+        )
+        .as_bytes()
+        .to_vec(),
+        b"{\"sample\": 3, \"detections\": []}\n{\"sample\": 2, \"detections\": []}\n{\"sample\": 1, \"detections\": []}\n{\"sample\": 0, \"detections\": []}\n".to_vec(),
+    ]
+}
+
+/// A detector program's answers to one frame.
+pub fn detector_answers() -> Vec<Vec<u8>> {
+    vec![
+        b"{\"detections\": [{\"pixel\": [400.0, 240.0], \"confidence\": 0.9}]}".to_vec(),
+        b"{\"sample\": 0, \"detections\": [{\"point\": [7.5, 0.0, 15.75]}]}".to_vec(),
+        b"{\"detections\": []}".to_vec(),
+    ]
+}

@@ -4,6 +4,7 @@
 
 use super::seeds::{self, paper, small};
 use super::{Fed, Format, Target};
+use geltip::evaluate::{self, Detector, Found, Predictions};
 use geltip::jobs::dataset;
 use geltip::localise::{self, Localiser, Method};
 use geltip::object::Mesh;
@@ -19,7 +20,7 @@ const CI: usize = 2000;
 
 /// Every target: name, input format, seeds, feed, CI cases. One row a parser.
 #[rustfmt::skip]
-static TARGETS: [Target; 16] = [
+static TARGETS: [Target; 18] = [
     t("sensor toml", Format::Toml, seeds::sensor_tomls, sensor_toml, CI),
     t("scene json", Format::Json, seeds::scene_jsons, scene_json, CI),
     t("scene toml", Format::Toml, seeds::scene_tomls, scene_toml, CI),
@@ -36,6 +37,8 @@ static TARGETS: [Target; 16] = [
     t("merge dataset.json", Format::Json, merge_manifests, merge_manifest, CI),
     t("merge first dataset.json", Format::Json, first_merge_manifests, merge_first_manifest, CI),
     t("merge labels.jsonl", Format::JsonLines, merge_labels_seeds, merge_labels, CI),
+    t("evaluate predictions.jsonl", Format::JsonLines, seeds::predictions_jsonl, predictions, CI),
+    t("evaluate detector answer", Format::Json, seeds::detector_answers, detector_answer, CI),
 ];
 
 const fn t(
@@ -369,5 +372,46 @@ fn merge_labels(dir: &Path, input: &[u8]) -> Fed {
         &seeds::shard_manifest(0),
         &seeds::shard_manifest(1),
         input,
+    )
+}
+
+/// Every number of some detections finite.
+fn check_found(found: &[Found]) -> Result<(), String> {
+    let mut v: Vec<f64> = found.iter().map(|f| f.confidence).collect();
+    v.extend(
+        found
+            .iter()
+            .flat_map(|f| f.point.map(|p| p.to_array()))
+            .flatten(),
+    );
+    v.extend(
+        found
+            .iter()
+            .flat_map(|f| f.pixel.map(|p| p.to_array()))
+            .flatten(),
+    );
+    finite("detections", &v)
+}
+
+/// A predictions file read and checked against a set of frames 0..4, then each frame's
+/// detections looked up.
+fn predictions(dir: &Path, input: &[u8]) -> Fed {
+    let path = file(dir, "predictions.jsonl", input);
+    let read = Predictions::read(&path, paper()).and_then(|mut p| {
+        p.start(&[0, 1, 2, 3])?;
+        Ok(p)
+    });
+    verdict(read, |p| {
+        let found: Vec<Found> = (0..4).flat_map(|k| p.detections_of(k)).collect();
+        check_found(&found)
+    })
+}
+
+/// One line a detector program answers with.
+fn detector_answer(_: &Path, input: &[u8]) -> Fed {
+    let text = String::from_utf8_lossy(input);
+    verdict(
+        evaluate::parse_line(paper(), &text, "answer"),
+        |(_, found)| check_found(&found),
     )
 }
