@@ -34,6 +34,7 @@ from ._geltip import (
     localise,
 )
 from .dataset import Dataset
+from .evaluate import EvaluationReport, evaluate
 
 #: Names of `Sensor.unproject`'s region codes, by code: 0 none, 1 hemisphere, 2 cylinder
 #: (the CLI's "region" strings).
@@ -49,6 +50,7 @@ def region_names(regions: "np.typing.ArrayLike") -> np.ndarray:
 __all__ = [
     "BUILD_PROFILE",
     "Dataset",
+    "EvaluationReport",
     "GeltipError",
     "GeltipIOError",
     "GpuError",
@@ -61,6 +63,7 @@ __all__ = [
     "Sensor",
     "Simulator",
     "__version__",
+    "evaluate",
     "host_speed",
     "keep_freed_memory",
     "load_image",

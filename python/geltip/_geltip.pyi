@@ -1,6 +1,18 @@
 """Type stubs of the native module (python/src/)."""
 import os
-from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    List,
+    Literal,
+    Mapping,
+    Optional,
+    Sequence,
+    Tuple,
+    Union,
+    overload,
+)
 
 import numpy as np
 import numpy.typing as npt
@@ -143,3 +155,18 @@ def keep_freed_memory() -> bool:
     """Asks the C allocator (glibc) to keep freed memory for reuse: every frame's fresh
     image buffers are then not page-faulted in again (1.0-1.4 ms a 640x480 frame on a 2-core
     VM). Process-wide, so geltip never does it on import. True when it applied."""
+
+def evaluate(
+    detector: Union[Callable[[_Image, _Image, Sensor], str], str],
+    *,
+    dataset: Optional[_Path] = None,
+    suite: Optional[str] = None,
+    sensor: Optional[Union[_Path, Sensor]] = None,
+    out: Optional[_Path] = None,
+    gate_mm: Optional[float] = 3.0,
+    name: Optional[str] = None,
+    compare: Optional[_Path] = None,
+) -> Dict[str, Any]:
+    """The native half of `geltip.evaluate`: `detector` answers each frame with its
+    detections as JSON text (or names a built-in localiser). Returns {"summary", "tables",
+    "per_sample", "files"}."""

@@ -11,11 +11,13 @@
 //! - `contact`: a contact's keyword arguments or dict as the library's `ContactSpec`.
 //! - `sensor`: `Sensor`. `simulator`: `Simulator`; `batch`: its `render_batch`.
 //! - `localise`: `localise`, `load_image`. `host`: `keep_freed_memory`, `host_speed`.
+//! - `evaluate`: `evaluate`, a detector (a function or a built-in) scored on a set or suite.
 
 mod batch;
 mod contact;
 mod convert;
 mod errors;
+mod evaluate;
 mod host;
 mod localise;
 mod sensor;
@@ -30,6 +32,7 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<sensor::Sensor>()?;
     m.add_class::<simulator::Simulator>()?;
     m.add_function(wrap_pyfunction!(localise::localise, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(localise::load_image, m)?)?;
     m.add_function(wrap_pyfunction!(host::keep_freed_memory, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_speed, m)?)?;

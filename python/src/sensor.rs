@@ -25,7 +25,7 @@ pub struct Sensor {
 }
 
 impl Sensor {
-    fn wrap(inner: geltip::Sensor) -> Sensor {
+    pub fn wrap(inner: geltip::Sensor) -> Sensor {
         Sensor {
             localiser: Localiser::new(&inner),
             inner,

@@ -109,8 +109,9 @@ pub enum Needs {
     Files,
 }
 
-/// A contact detector: finds the contacts in a frame.
-pub trait Detector {
+/// A contact detector: finds the contacts in a frame. `Send`: a run may be handed to
+/// another thread (Python releases the GIL while one runs).
+pub trait Detector: Send {
     /// The name reports give it.
     fn name(&self) -> String;
 

@@ -1,0 +1,128 @@
+"""`geltip.evaluate`: score any contact detector against the exact labels, with the same
+protocol, files and tables as ``geltip evaluate`` (see docs/evaluate.md).
+
+    import geltip
+
+    def detect(image, reference, sensor):      # (H, W, 3) uint8 arrays, a geltip.Sensor
+        ...
+        return [{"pixel": [u, v], "confidence": 0.8}]   # or {"point": [x, y, z]} in mm
+
+    report = geltip.evaluate(detect, suite="paper", sensor="paper", out="eval/mine")
+    print(report.tables)
+    report.summary["recall"], report.summary["error_mm"]["median"]
+"""
+import json
+import math
+from dataclasses import dataclass, field
+from os import PathLike
+from typing import Any, Callable, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _geltip
+
+Detection = Dict[str, Any]
+Detector = Callable[[np.ndarray, np.ndarray, "_geltip.Sensor"], Sequence[Detection]]
+
+
+@dataclass(frozen=True)
+class EvaluationReport:
+    """What `evaluate` measured: ``summary`` is ``summary.json``'s dict, ``tables`` the
+    Markdown tables, ``per_sample`` one dict per frame (``per_sample.jsonl``), ``files``
+    the names written in ``out``."""
+
+    summary: Dict[str, Any]
+    tables: str
+    per_sample: List[Dict[str, Any]] = field(repr=False)
+    files: List[str]
+
+    def __repr__(self) -> str:
+        s = self.summary
+        recall = s.get("recall")
+        recall = "-" if recall is None else f"{recall:.3f}"
+        return (
+            f"EvaluationReport(detector={s.get('detector')!r}, samples={s.get('samples')}, "
+            f"recall={recall}, false_positives={s.get('false_positives')})"
+        )
+
+
+def _numbers(value: Any) -> Any:
+    """A pixel or point as a list of floats; non-finite ones as None (the library names
+    them)."""
+    flat = np.asarray(value, dtype=float).ravel().tolist()
+    return [x if math.isfinite(x) else None for x in flat]
+
+
+def _as_json(found: Optional[Sequence[Detection]]) -> str:
+    """A detector's answer as the JSON list the library reads: only converted here, every
+    value is checked by the library."""
+    if found is None:
+        return "[]"
+    if isinstance(found, dict) or not isinstance(found, (list, tuple)):
+        raise TypeError(
+            f"a detector returns a list of detections (dicts), got {type(found).__name__}"
+        )
+    out = []
+    for d in found:
+        if not isinstance(d, dict):
+            out.append(d)
+            continue
+        entry = dict(d)
+        for key in ("pixel", "point"):
+            if entry.get(key) is not None:
+                entry[key] = _numbers(entry[key])
+        c = entry.get("confidence")
+        if c is not None:
+            c = float(c)
+            entry["confidence"] = c if math.isfinite(c) else None
+        out.append(entry)
+    return json.dumps(out)
+
+
+def evaluate(
+    detector: Union[Detector, str],
+    *,
+    dataset: Optional[Union[str, PathLike]] = None,
+    suite: Optional[str] = None,
+    sensor: Optional[Union[str, PathLike, "_geltip.Sensor"]] = None,
+    out: Optional[Union[str, PathLike]] = None,
+    gate_mm: Optional[float] = 3.0,
+    name: Optional[str] = None,
+    compare: Optional[Union[str, PathLike]] = None,
+) -> EvaluationReport:
+    """Scores ``detector`` on a set from ``geltip dataset`` (``dataset=``) or a suite
+    rendered on the fly (``suite="paper"`` or ``"stability"``, with ``sensor=``).
+
+    ``detector(image, reference, sensor)`` gets each frame and its empty frame as
+    (H, W, 3) uint8 arrays and the frame's ``geltip.Sensor``, and returns a list of
+    detections: dicts with ``"pixel": [u, v]`` or ``"point": [x, y, z]`` (mm, camera
+    frame) and an optional ``"confidence"``. ``"surface"`` or ``"paper"`` names a
+    built-in localiser instead. Detections are matched one to one to the visible
+    contacts within ``gate_mm`` (None: any distance). With ``out``, the report's files
+    (summary.json, per_sample.jsonl, tables.md, charts) are written there, beside
+    ``compare``'s (another run's output directory). An exception the detector raises
+    stops the run and is raised again.
+    """
+    if callable(detector):
+        user = detector
+
+        def answer(image, reference, sensor_):
+            return _as_json(user(image, reference, sensor_))
+
+        answer.__name__ = getattr(user, "__name__", "python")
+        native = answer
+    else:
+        native = detector
+    r = _geltip.evaluate(
+        native,
+        dataset=dataset,
+        suite=suite,
+        sensor=sensor,
+        out=out,
+        gate_mm=gate_mm,
+        name=name,
+        compare=compare,
+    )
+    return EvaluationReport(
+        summary=r["summary"], tables=r["tables"], per_sample=r["per_sample"], files=r["files"]
+    )

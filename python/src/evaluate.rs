@@ -1,0 +1,171 @@
+//! `geltip._geltip.evaluate`: a detector scored by the library's `geltip evaluate` job. The
+//! detector is a built-in localiser's name, or a Python function given each frame's image,
+//! reference and sensor that answers with its detections as a JSON list (the pure-Python
+//! half converts what the user's function returns); the library checks them.
+
+use crate::convert::{json_to_py, path_or_str};
+use crate::errors::{bad, detached};
+use crate::sensor::Sensor;
+use geltip::evaluate::{
+    detections::detections_from_json, Detector, Found, MethodDetector, Named, Sample,
+};
+use geltip::jobs::evaluate as job;
+use geltip::localise::Method;
+use geltip::GeltipError;
+use numpy::{PyArray, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+/// A Python function as a detector. An exception it raises stops the run and is raised
+/// again, as it was, once the run has stopped.
+struct PyDetector {
+    function: Py<PyAny>,
+    /// Each frame's sensor as a `geltip.Sensor`, made once per sensor.
+    sensors: Vec<(geltip::SensorConfig, Py<Sensor>)>,
+    /// What the function raised, for the caller to raise again.
+    raised: Arc<Mutex<Option<PyErr>>>,
+}
+
+impl PyDetector {
+    fn sensor(&mut self, py: Python<'_>, sensor: &geltip::Sensor) -> PyResult<Py<Sensor>> {
+        if let Some((_, s)) = self.sensors.iter().find(|(c, _)| *c == sensor.config) {
+            return Ok(s.clone_ref(py));
+        }
+        let s = Py::new(py, Sensor::wrap(sensor.clone()))?;
+        self.sensors.push((sensor.config.clone(), s.clone_ref(py)));
+        Ok(s)
+    }
+
+    /// The function's answer for `sample`: its detections as JSON text.
+    fn call(&mut self, py: Python<'_>, sample: &Sample) -> PyResult<String> {
+        let array = |rgb: &image::RgbImage| {
+            let (w, h) = rgb.dimensions();
+            PyArray::from_slice(py, rgb.as_raw()).reshape([h as usize, w as usize, 3])
+        };
+        let image = array(sample.image.rgb(&sample.sensor).map_err(to_py)?)?;
+        let reference = array(sample.reference.rgb(&sample.sensor).map_err(to_py)?)?;
+        let sensor = self.sensor(py, &sample.sensor)?;
+        self.function
+            .call1(py, (image, reference, sensor))?
+            .extract::<String>(py)
+    }
+}
+
+fn to_py(e: GeltipError) -> PyErr {
+    crate::errors::lib::<()>(Err(e)).unwrap_err()
+}
+
+impl Detector for PyDetector {
+    fn name(&self) -> String {
+        Python::attach(|py| {
+            self.function
+                .bind(py)
+                .getattr("__name__")
+                .and_then(|n| n.extract::<String>())
+                .unwrap_or_else(|_| "python".into())
+        })
+    }
+
+    fn detect(&mut self, sample: &Sample) -> geltip::Result<Vec<Found>> {
+        let k = sample.truth.index;
+        let what = format!("detector, sample {k}");
+        match Python::attach(|py| self.call(py, sample)) {
+            Ok(text) => {
+                let v: serde_json::Value = serde_json::from_str(&text)
+                    .map_err(|e| GeltipError::input(&what, format!("detections: {e}")))?;
+                detections_from_json(&sample.sensor, &v, &what)
+            }
+            Err(e) => {
+                if let Ok(mut slot) = self.raised.lock() {
+                    *slot = Some(e);
+                }
+                Err(GeltipError::input(what, "the function raised an exception"))
+            }
+        }
+    }
+}
+
+/// Scores `detector` (a function `(image, reference, sensor) -> JSON text`, or "surface" or
+/// "paper") on a dataset's directory or a suite ("paper", "stability", with `sensor`), with
+/// the matching gate `gate_mm` (None: any distance). With `out`, the report's files go
+/// there, beside `compare`'s (another run's output directory). Returns {"summary",
+/// "tables", "per_sample", "files"}.
+#[pyfunction]
+#[pyo3(signature = (detector, *, dataset = None, suite = None, sensor = None, out = None, gate_mm = Some(3.0), name = None, compare = None))]
+#[allow(clippy::too_many_arguments)] // The keyword arguments of geltip.evaluate, one each.
+pub fn evaluate<'py>(
+    py: Python<'py>,
+    detector: &Bound<'py, PyAny>,
+    dataset: Option<&Bound<'py, PyAny>>,
+    suite: Option<String>,
+    sensor: Option<&Bound<'py, PyAny>>,
+    out: Option<&Bound<'py, PyAny>>,
+    gate_mm: Option<f64>,
+    name: Option<String>,
+    compare: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let path = |field: &str, v: Option<&Bound<'py, PyAny>>| -> PyResult<Option<PathBuf>> {
+        v.map(|v| path_or_str(field, v).map(PathBuf::from))
+            .transpose()
+    };
+    let (dataset, out, compare) = (
+        path("dataset", dataset)?,
+        path("out", out)?,
+        path("compare", compare)?,
+    );
+    let sensor = sensor
+        .map(|s| Sensor::of(py, Some(s)).map(|s| s.get().inner.clone()))
+        .transpose()?;
+    let raised = Arc::new(Mutex::new(None));
+    let inner: Box<dyn Detector> = if let Ok(method) = detector.extract::<String>() {
+        // The library names the method; here the argument is the detector.
+        let method = Method::from_name(&method).map_err(|e| match e {
+            GeltipError::InvalidInput { reason, .. } => bad("detector", reason),
+            other => to_py(other),
+        })?;
+        Box::new(MethodDetector::new(method))
+    } else if detector.is_callable() {
+        Box::new(PyDetector {
+            function: detector.clone().unbind(),
+            sensors: Vec::new(),
+            raised: raised.clone(),
+        })
+    } else {
+        return Err(bad(
+            "detector",
+            "expected a function (image, reference, sensor) -> detections, or 'surface' or 'paper'",
+        ));
+    };
+    let mut detector = Named::new(inner, name);
+    let outcome = detached(py, "evaluating", || {
+        let source = job::source(dataset.as_deref(), suite.as_deref(), sensor.as_ref())?;
+        job::run(
+            &source,
+            &mut detector,
+            gate_mm,
+            out.as_deref(),
+            compare.as_deref(),
+            |_, _| {},
+        )
+    });
+    let outcome = match outcome {
+        Ok(o) => o,
+        Err(e) => return Err(raised.lock().ok().and_then(|mut r| r.take()).unwrap_or(e)),
+    };
+    let report = PyDict::new(py);
+    report.set_item("summary", json_to_py(py, &outcome.summary)?)?;
+    report.set_item("tables", outcome.tables)?;
+    let per_sample = geltip::evaluate::report::per_sample_jsonl(&outcome.evaluation);
+    let lines: Vec<serde_json::Value> = per_sample
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect();
+    report.set_item(
+        "per_sample",
+        json_to_py(py, &serde_json::Value::Array(lines))?,
+    )?;
+    report.set_item("files", outcome.files)?;
+    Ok(report.into_any())
+}
