@@ -1,6 +1,6 @@
 //! use shared/common.wgsl
 //! use shared/shading.wgsl
-// Stage 4, LEDs: three point lights at the finger's base light the painted skin (the light
+// Stage 4, LEDs: point lights at the finger's base light the painted skin (the light
 // model, shared/shading.wgsl, is applied by the camera's passes as each ray lands, so no
 // G-buffer travels between the stages); here, the sensor's seeded noise on the finished
 // frame. Mirror: src/render/leds.rs.
@@ -39,7 +39,7 @@ fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let at = image_index(id.xy);
     let v = image[at];
-    let n = sensor.noise * noise_samples(i, frame.noise_seed);
+    let n = sensor.noise.xyz * noise_samples(i, frame.noise_seed);
     let level = vec3<f32>(vec3<u32>(v, v >> 8u, v >> 16u) & vec3<u32>(255u)) + n;
     let out = vec3<u32>(clamp(round(level), vec3<f32>(0.0), vec3<f32>(255.0)));
     image[at] = pack_rgba(out);

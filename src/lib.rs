@@ -13,6 +13,7 @@ pub use error::{GeltipError, Result};
 pub use finger::{Finger, Region, SurfaceCoord, SurfacePoint};
 pub use lens::{Lens, LensModel};
 pub use sensor::{NotVisible, Sensor, SensorConfig};
+pub mod calibrate;
 pub mod evaluate;
 pub mod gpu;
 pub mod host_speed;

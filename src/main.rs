@@ -25,6 +25,7 @@ fn main() {
         Command::Experiment(args) => cli::jobs::experiment(args),
         Command::Dataset(args) => cli::dataset::dataset(args),
         Command::Evaluate(args) => cli::evaluate::evaluate(args),
+        Command::Calibrate(args) => cli::calibrate::calibrate(args),
         Command::Preview(args) => cli::jobs::preview(args),
         Command::Stability(args) => cli::jobs::stability(args),
         Command::Tradeoff(args) => cli::jobs::tradeoff(args),

@@ -359,7 +359,7 @@ fn profiling_a_frame_times_every_stage_and_leaves_the_renderer_as_rendering_does
 #[test]
 fn noise_is_seeded() {
     let mut c = common::paper_config();
-    c.render.noise = 2.0;
+    c.render.noise = 2.0.into();
     c.render.noise_seed = 7;
     let sensor = Sensor::from_config("noisy", c).unwrap();
     let contact = contact(Solid::Sphere, Place::Rotation(0.0), 0.5);
@@ -392,7 +392,7 @@ fn noise_is_seeded() {
 #[test]
 fn sensor_noise_is_gaussian_with_the_configured_spread() {
     let mut c = common::paper_config();
-    c.render.noise = 2.0;
+    c.render.noise = 2.0.into();
     c.render.noise_seed = 11;
     let mut r = Renderer::new(&Sensor::from_config("noisy", c).unwrap()).unwrap();
     let reference = r.reference().rgba.clone();

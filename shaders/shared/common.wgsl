@@ -32,13 +32,10 @@ struct Sensor {
     texel_mm: f32,
     blend_mm: f32,
     bulge: f32,
-    ambient: f32,
-    intensity: f32,
-    falloff_mm: f32,
     diffuse: f32,
     specular: f32,
     shininess: f32,
-    noise: f32,
+    led_count: u32,
     spread: f32,
     // Elastomer: the skin's tightest bend (mm) and the surface mm between the narrow and
     // the wide kernel's taps.
@@ -48,9 +45,17 @@ struct Sensor {
     // Their taps on each side of the centre (read as NARROW_TAPS and WIDE_TAPS).
     narrow_taps: u32,
     wide_taps: u32,
-    _pad0: u32,
-    led_position: array<vec4<f32>, 3>,
-    led_colour: array<vec4<f32>, 3>,
+    // Sensor noise by channel (8-bit levels).
+    noise: vec4<f32>,
+    ambient: vec4<f32>,
+    paint_colour: vec4<f32>,
+    // Vignetting 1 + x r^2 + y r^4, r the distance from the principal point times z.
+    vignetting: vec4<f32>,
+    // Per LED (led_count of MAX_LEDS): position, colour, and x intensity, y spread,
+    // z falloff_mm.
+    led_position: array<vec4<f32>, 8>,
+    led_colour: array<vec4<f32>, 8>,
+    led_light: array<vec4<f32>, 8>,
     // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
     blend_weights: array<vec4<f32>, 65>,
 }
@@ -86,9 +91,9 @@ struct Frame {
     meridian_rect: vec4<u32>,
 }
 
-// The sensor's lens model, ray steps, kernel taps and shading exponents (the Sensor
-// uniform's lens_model, ray_steps, narrow_taps, wide_taps, spread and shininess, which the
-// shaders do not read) as pipeline constants, set when the renderer builds its pipelines
+// The sensor's lens model, ray steps, kernel taps, LED count and shading exponents (the
+// Sensor uniform's lens_model, ray_steps, narrow_taps, wide_taps, led_count, spread and
+// shininess, which the shaders do not read) as pipeline constants, set when the renderer builds its pipelines
 // (SensorUniform::pipeline_constants): the driver folds the lens switch and knows the loops'
 // trip counts (callgrind: 1.2% fewer instructions a contact frame on lavapipe). The defaults
 // are the paper sensor's.
@@ -99,10 +104,13 @@ override WIDE_TAPS: i32 = 3;
 // Whether the wide kernel's taps lie on every other narrow tap (its step exactly twice the
 // narrow one's, as on the paper sensor): the meridians pass then samples those places once.
 override WIDE_TAPS_NESTED: bool = true;
-// The LEDs' emission exponent and the paint's shininess: whole exponents are multiplied out
-// (shared/shading.wgsl power).
+// The LEDs in use; their shared emission exponent (-1 when each has its own, read from
+// led_light) and the paint's shininess: whole exponents are multiplied out
+// (shared/shading.wgsl power); whether the camera vignettes.
+override LED_COUNT: i32 = 3;
 override LED_SPREAD: f32 = 2.0;
 override PAINT_SHININESS: f32 = 24.0;
+override VIGNETTING: bool = false;
 
 const GRID_OBJECT: u32 = 100u;
 // object_kind of the reference frame (no object; every pixel is shaded).

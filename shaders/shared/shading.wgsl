@@ -25,17 +25,22 @@ fn power(x: f32, e: f32) -> f32 {
     return result;
 }
 
-// Relative emission towards unit direction `towards`: the LEDs shine up the finger (+z).
-fn emission(towards: vec3<f32>) -> f32 {
-    return power(max(towards.z, 0.0), LED_SPREAD);
+// Relative emission of LED i towards unit direction `towards`: the LEDs shine up the finger
+// (+z). Their shared spread is a pipeline constant; -1 means each has its own.
+fn emission(i: i32, towards: vec3<f32>) -> f32 {
+    var spread = LED_SPREAD;
+    if spread < 0.0 {
+        spread = sensor.led_light[i].y;
+    }
+    return power(max(towards.z, 0.0), spread);
 }
 
 fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
     // The paint faces the inside of the finger, where the camera and the LEDs are.
     let facing = -normal;
     let view = -ray;
-    var colour = vec3<f32>(sensor.ambient);
-    for (var i = 0; i < 3; i++) {
+    var colour = sensor.ambient.xyz;
+    for (var i = 0; i < LED_COUNT; i++) {
         let to_led = sensor.led_position[i].xyz - p;
         let dist = length(to_led);
         let l = to_led / dist;
@@ -43,13 +48,13 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
         if lambert <= 0.0 {
             continue;
         }
-        let d = dist / sensor.falloff_mm;
-        let falloff = emission(-l) / (1.0 + d * d);
+        let d = dist / sensor.led_light[i].z;
+        let falloff = emission(i, -l) / (1.0 + d * d);
         let half_vector = normalize(l + view);
         let spec = power(max(dot(facing, half_vector), 0.0), PAINT_SHININESS);
-        colour += sensor.led_colour[i].xyz * (sensor.intensity * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
+        colour += sensor.led_colour[i].xyz * (sensor.led_light[i].x * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
     }
-    return colour;
+    return colour * sensor.paint_colour.xyz;
 }
 
 fn encode(linear: f32) -> u32 {
@@ -61,11 +66,17 @@ fn pack_rgba(c: vec3<u32>) -> u32 {
     return c.x | (c.y << 8u) | (c.z << 16u) | (255u << 24u);
 }
 
-// Pixel i's colour from the linear light `colour` (black beyond the lens) and the
-// indentation it sees.
+// Pixel i's colour from the linear light `colour` (black beyond the lens), vignetted, and the
+// indentation it sees. Mirror: src/render/leds.rs pixel_colour.
 fn write_pixel(xy: vec2<u32>, colour: vec3<f32>, depth: f32) {
     let i = image_index(xy);
-    image[i] = pack_rgba(vec3<u32>(encode(colour.x), encode(colour.y), encode(colour.z)));
+    var c = colour;
+    if VIGNETTING {
+        let r = length(vec2<f32>(xy) - sensor.principal) * sensor.vignetting.z;
+        let r2 = r * r;
+        c = c * (1.0 + sensor.vignetting.x * r2 + sensor.vignetting.y * r2 * r2);
+    }
+    image[i] = pack_rgba(vec3<u32>(encode(c.x), encode(c.y), encode(c.z)));
     indentation[i] = depth;
 }
 

@@ -4,7 +4,7 @@ use super::progress;
 use anyhow::{Context, Result};
 use clap::Args;
 use geltip::jobs::dataset;
-use geltip::sensor::Sensor;
+use geltip::sensor::{Noise, Sensor};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -115,7 +115,9 @@ impl DatasetArgs {
         }
         spec.depth_maps = self.depth_maps;
         spec.masks = self.masks;
-        spec.noise = self.noise.unwrap_or(spec.sensor.config.render.noise);
+        spec.noise = self
+            .noise
+            .map_or(spec.sensor.config.render.noise, Noise::from);
         spec.light_jitter = self.light_jitter;
         spec.paint_jitter = self.paint_jitter;
         spec.background = self.background;

@@ -1,6 +1,7 @@
 //! The commands of the `geltip` binary: their arguments (clap) and one function each, in
 //! the module of what they run.
 
+pub mod calibrate;
 pub mod dataset;
 pub mod evaluate;
 pub mod jobs;
@@ -70,6 +71,14 @@ pub enum Command {
     ///   geltip evaluate --suite paper --sensor paper --method surface --out eval/surface --compare eval/mine
     #[command(verbatim_doc_comment)]
     Evaluate(evaluate::EvaluateArgs),
+    /// Fit a sensor file to a real GelTip's frames: the lens from the image circle, the LEDs,
+    /// ambient light, paint and vignetting from an empty frame, the noise from several, the
+    /// imprint's values from frames with known contacts.
+    ///
+    /// Example:
+    ///   geltip calibrate --sensor paper --empty empty.png --out calibrated
+    #[command(verbatim_doc_comment)]
+    Calibrate(calibrate::CalibrateArgs),
     /// Preview sensor designs before building them: what the camera sees, the resolution
     /// down the finger, a picture per design, and a lens sweep.
     ///

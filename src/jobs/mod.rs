@@ -3,6 +3,7 @@
 //! localisation experiment; [`dataset`] renders labelled synthetic datasets; [`preview`]
 //! shows what a sensor design sees; [`stability`] sweeps contacts to find where the
 //! detectors fail; [`tradeoff`] measures the renderer's knobs for speed against accuracy.
+pub mod calibrate;
 pub mod dataset;
 pub mod evaluate;
 pub mod experiment;

@@ -13,7 +13,7 @@ use crate::evaluate::{
 use crate::localise::Method;
 use crate::object::{Object, Solid};
 use crate::render::{GroundTruth, Place, Press};
-use crate::sensor::Sensor;
+use crate::sensor::{Noise, Sensor};
 use crate::view;
 
 pub use crate::evaluate::{region_of, REGIONS};
@@ -199,7 +199,7 @@ fn plan(sensor: &Sensor, sweep: &Sweep) -> Result<(Suite, Vec<Role>)> {
     let mut roles = Vec::new();
     for &noisy in passes {
         let mut config = sensor.config.clone();
-        config.render.noise = if noisy { sweep.noise } else { 0.0 };
+        config.render.noise = Noise::from(if noisy { sweep.noise } else { 0.0 });
         let name = if noisy {
             format!("{} + noise {}", sensor.name, sweep.noise)
         } else {

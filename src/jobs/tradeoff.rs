@@ -22,7 +22,7 @@ use crate::object::{Object, SdfGrid, Solid, MESH_PAD_MM, MESH_VOXEL_MM};
 use crate::output;
 use crate::render::gpu::Renderer;
 use crate::render::{Frame, GroundTruth, Press};
-use crate::sensor::Sensor;
+use crate::sensor::{Noise, Sensor};
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -231,7 +231,7 @@ pub fn sensor_for(sensor: &Sensor, knobs: &Knobs) -> Result<Sensor> {
     c.render.heightfield_texels = knobs.texels;
     c.render.ray_steps = knobs.ray_steps;
     c.render.blend_tap_spacing = knobs.tap_spacing;
-    c.render.noise = 0.0;
+    c.render.noise = Noise::NONE;
     if knobs.image_scale != 1.0 {
         if !(knobs.image_scale.is_finite() && knobs.image_scale > 0.0) {
             return Err(GeltipError::input(

@@ -52,8 +52,9 @@ pub fn render(sensor: &Sensor, contact: Option<&Press>) -> Result<CpuRender> {
     let (w, h) = (sensor.width, sensor.height);
     let mut rgba = vec![0u8; (w * h * 4) as usize];
     let mut indentation = vec![0.0f32; (w * h) as usize];
-    let noise = sensor.config.render.noise;
+    let noise = sensor.config.render.noise.rgb();
     let seed = sensor.config.render.noise_seed;
+    let light = sensor.lighting();
     for y in 0..h {
         for x in 0..w {
             let i = (y * w + x) as usize;
@@ -68,12 +69,12 @@ pub fn render(sensor: &Sensor, contact: Option<&Press>) -> Result<CpuRender> {
             ) else {
                 continue;
             };
-            let colour = leds::shade(sensor, &hit);
+            let pixel = DVec2::new(x as f64, y as f64);
+            let colour = leds::pixel_colour(sensor, &light, pixel, &hit);
             let samples = leds::noise_samples(i as u32, seed);
-            for (ch, v) in colour.to_array().into_iter().enumerate() {
-                let level = leds::encode(v);
-                rgba[i * 4 + ch] = if noise > 0.0 {
-                    leds::add_noise(level, noise * samples[ch])
+            for (ch, level) in colour.into_iter().enumerate() {
+                rgba[i * 4 + ch] = if noise[ch] > 0.0 {
+                    leds::add_noise(level, noise[ch] * samples[ch])
                 } else {
                     level
                 };
@@ -134,6 +135,7 @@ pub fn render_contact(
     };
     let w = sensor.width;
     let touched_pixels = touched::select_touched(sensor, grid, &height, pixels);
+    let light = sensor.lighting();
     let shaded: Vec<(usize, [u8; 3], f32)> = touched_pixels
         .par_iter()
         .map(|&i| {
@@ -141,7 +143,7 @@ pub fn render_contact(
             let steps = sensor.config.render.ray_steps;
             match camera::cast_ray(sensor, grid, &height, &normals, pixel, steps) {
                 Some(hit) => {
-                    let c = leds::shade(sensor, &hit).to_array().map(leds::encode);
+                    let c = leds::pixel_colour(sensor, &light, pixel, &hit);
                     (i as usize, c, hit.indentation as f32)
                 }
                 None => (i as usize, [0; 3], 0.0),

@@ -1,34 +1,17 @@
-//! Stage 4, LEDs: three point lights at the base of the finger, 120 degrees apart, light the
-//! painted skin from the inside (diffuse + Blinn-Phong specular, inverse-square-like
+//! Stage 4, LEDs: point lights at the base of the finger (the paper's ring of three, or any
+//! list of up to eight) light the painted skin from the inside (diffuse + Blinn-Phong specular, inverse-square-like
 //! fall-off, a little ambient light); the result is gamma-encoded to 8 bits, with optional
 //! seeded sensor noise. CPU mirror of `shaders/leds.wgsl` (same names).
 
 use super::camera::SkinHit;
-use crate::sensor::{LedColours, Sensor};
-use glam::DVec3;
+use crate::sensor::{Lighting, PaintConfig, Sensor};
+use glam::{DVec2, DVec3};
 
-/// One LED: position in the camera frame and colour.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Led {
-    pub position: DVec3,
-    pub colour: DVec3,
-}
+pub use crate::sensor::Led;
 
-/// The sensor's three LEDs: on a ring just inside the elastomer at the configured height.
-pub fn leds(sensor: &Sensor) -> [Led; 3] {
-    let c = &sensor.config.leds;
-    let ring = 0.8 * (sensor.finger.radius - sensor.finger.shell_thickness);
-    let colours = match c.colours {
-        LedColours::Rgb => [DVec3::X, DVec3::Y, DVec3::Z],
-        LedColours::White => [DVec3::splat(0.5); 3],
-    };
-    std::array::from_fn(|i| {
-        let a = (c.azimuth_deg + 120.0 * i as f64).to_radians();
-        Led {
-            position: DVec3::new(ring * a.cos(), ring * a.sin(), c.z_mm),
-            colour: colours[i],
-        }
-    })
+/// The sensor's LEDs in the camera frame.
+pub fn leds(sensor: &Sensor) -> Vec<Led> {
+    sensor.lighting().leds
 }
 
 /// Relative emission of an LED towards unit direction `towards`: it shines up the finger.
@@ -41,12 +24,16 @@ pub fn emission(towards: DVec3, spread: f64) -> f64 {
 
 /// Linear radiance reaching the camera from a skin point.
 pub fn shade(sensor: &Sensor, hit: &SkinHit) -> DVec3 {
-    let c = &sensor.config;
+    shade_with(&sensor.lighting(), &sensor.config.paint, hit)
+}
+
+/// [`shade`] with the light already resolved (what a loop over many pixels calls).
+pub fn shade_with(light: &Lighting, paint: &PaintConfig, hit: &SkinHit) -> DVec3 {
     // The paint faces the inside of the finger, where the camera and the LEDs are.
     let facing = -hit.normal;
     let view = -hit.ray;
-    let mut colour = DVec3::splat(c.leds.ambient);
-    for led in leds(sensor) {
+    let mut colour = light.ambient;
+    for led in &light.leds {
         let to_led = led.position - hit.point;
         let dist = to_led.length();
         let l = to_led / dist;
@@ -54,13 +41,27 @@ pub fn shade(sensor: &Sensor, hit: &SkinHit) -> DVec3 {
         if lambert <= 0.0 {
             continue;
         }
-        let falloff = emission(-l, c.leds.spread) / (1.0 + (dist / c.leds.falloff_mm).powi(2));
+        let falloff = emission(-l, led.spread) / (1.0 + (dist / led.falloff_mm).powi(2));
         let half = (l + view).normalize();
-        let spec = facing.dot(half).max(0.0).powf(c.paint.shininess);
+        let spec = facing.dot(half).max(0.0).powf(paint.shininess);
         colour += led.colour
-            * (c.leds.intensity * falloff * (c.paint.diffuse * lambert + c.paint.specular * spec));
+            * (led.intensity * falloff * (paint.diffuse * lambert + paint.specular * spec));
     }
-    colour
+    colour * light.paint_colour
+}
+
+/// The vignetting gain at `pixel`: [`Lighting::vignette`] at its distance from the principal
+/// point over the lens's image-circle radius.
+pub fn vignette(sensor: &Sensor, light: &Lighting, pixel: DVec2) -> f64 {
+    light.vignette((pixel - sensor.principal).length() / sensor.lens.max_rho())
+}
+
+/// The 8-bit colour of `pixel` whose ray meets `hit`: shaded, vignetted, gamma-encoded.
+pub fn pixel_colour(sensor: &Sensor, light: &Lighting, pixel: DVec2, hit: &SkinHit) -> [u8; 3] {
+    let gain = vignette(sensor, light, pixel);
+    (shade_with(light, &sensor.config.paint, hit) * gain)
+        .to_array()
+        .map(encode)
 }
 
 /// PCG hash (the same integer arithmetic runs in WGSL).

@@ -2,9 +2,9 @@
 //! Pod types whose sizes are asserted here and whose layout a test checks against naga's.
 
 use super::contact::Footprint;
-use super::{leds, ContactPose, HeightfieldGrid, Rect};
+use super::{ContactPose, HeightfieldGrid, Rect};
 use crate::object::Object;
-use crate::sensor::Sensor;
+use crate::sensor::{Sensor, MAX_LEDS};
 use bytemuck::{Pod, Zeroable};
 
 /// WGSL `Sensor`: everything about the sensor that every stage reads.
@@ -28,13 +28,12 @@ pub struct SensorUniform {
     pub texel_mm: f32,
     pub blend_mm: f32,
     pub bulge: f32,
-    pub ambient: f32,
-    pub intensity: f32,
-    pub falloff_mm: f32,
     pub diffuse: f32,
     pub specular: f32,
     pub shininess: f32,
-    pub noise: f32,
+    /// LEDs in use (the shaders take it as a pipeline constant).
+    pub led_count: u32,
+    /// The spread every LED shares, or -1 when they differ (a pipeline constant).
     pub spread: f32,
     pub drape_mm: f32,
     /// Surface mm between the narrow and the wide Gaussian's taps.
@@ -43,9 +42,19 @@ pub struct SensorUniform {
     /// Their taps each side (the shaders take these as pipeline constants).
     pub narrow_taps: u32,
     pub wide_taps: u32,
-    pub _pad: u32,
-    pub led_position: [[f32; 4]; 3],
-    pub led_colour: [[f32; 4]; 3],
+    /// Sensor noise by channel (8-bit levels; w unused).
+    pub noise: [f32; 4],
+    /// Ambient light (linear RGB; w unused).
+    pub ambient: [f32; 4],
+    /// The paint's colour (linear RGB; w unused).
+    pub paint_colour: [f32; 4],
+    /// Vignetting: x a, y b, z one over the image circle's radius (px); w unused.
+    pub vignetting: [f32; 4],
+    /// Each LED's position (xyz; w unused), colour (xyz; w unused) and light: x intensity,
+    /// y spread, z falloff_mm (w unused). LEDs past `led_count` are zero.
+    pub led_position: [[f32; 4]; MAX_LEDS],
+    pub led_colour: [[f32; 4]; MAX_LEDS],
+    pub led_light: [[f32; 4]; MAX_LEDS],
     /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
     /// [`super::elastomer::blend_weights`].
     pub blend_weights: [[f32; 4]; BLEND_WEIGHTS],
@@ -54,7 +63,8 @@ pub struct SensorUniform {
 /// Entries of the weight table: taps 0..=MAX_BLEND_TAPS.
 pub const BLEND_WEIGHTS: usize = super::elastomer::MAX_BLEND_TAPS as usize + 1;
 
-const _: () = assert!(std::mem::size_of::<SensorUniform>() == 240 + 16 * BLEND_WEIGHTS);
+const _: () =
+    assert!(std::mem::size_of::<SensorUniform>() == 192 + 3 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -95,7 +105,19 @@ pub fn rect4(r: Option<Rect>) -> [u32; 4] {
 impl SensorUniform {
     pub fn new(sensor: &Sensor, grid: &HeightfieldGrid) -> Self {
         let c = &sensor.config;
-        let lights = leds::leds(sensor);
+        let light = sensor.lighting();
+        let mut leds = [[[0.0f32; 4]; MAX_LEDS]; 3];
+        for (i, l) in light.leds.iter().enumerate() {
+            leds[0][i] = vec4(l.position, 0.0);
+            leds[1][i] = vec4(l.colour, 0.0);
+            leds[2][i] = [
+                l.intensity as f32,
+                l.spread as f32,
+                l.falloff_mm as f32,
+                0.0,
+            ];
+        }
+        let noise = c.render.noise.rgb();
         let f = &sensor.finger;
         let kernel = super::elastomer::Kernel::for_config(c, grid);
         let mut blend_weights = [[0.0f32; 4]; BLEND_WEIGHTS];
@@ -128,30 +150,28 @@ impl SensorUniform {
             texel_mm: grid.texel_mm() as f32,
             blend_mm: c.elastomer.blend_mm as f32,
             bulge: c.elastomer.bulge as f32,
-            ambient: c.leds.ambient as f32,
-            intensity: c.leds.intensity as f32,
-            falloff_mm: c.leds.falloff_mm as f32,
             diffuse: c.paint.diffuse as f32,
             specular: c.paint.specular as f32,
             shininess: c.paint.shininess as f32,
-            noise: c.render.noise as f32,
-            spread: c.leds.spread as f32,
+            led_count: light.leds.len() as u32,
+            spread: light.shared_spread().map_or(-1.0, |s| s as f32),
             drape_mm: c.elastomer.drape_mm as f32,
             narrow_step_mm: kernel.narrow.step_mm as f32,
             wide_step_mm: kernel.wide.step_mm as f32,
             narrow_taps: kernel.narrow.count as u32,
             wide_taps: kernel.wide.count as u32,
-            _pad: 0,
-            led_position: lights.map(|l| {
-                [
-                    l.position.x as f32,
-                    l.position.y as f32,
-                    l.position.z as f32,
-                    0.0,
-                ]
-            }),
-            led_colour: lights
-                .map(|l| [l.colour.x as f32, l.colour.y as f32, l.colour.z as f32, 0.0]),
+            noise: [noise[0] as f32, noise[1] as f32, noise[2] as f32, 0.0],
+            ambient: vec4(light.ambient, 0.0),
+            paint_colour: vec4(light.paint_colour, 0.0),
+            vignetting: [
+                light.vignetting[0] as f32,
+                light.vignetting[1] as f32,
+                (1.0 / sensor.lens.max_rho()) as f32,
+                0.0,
+            ],
+            led_position: leds[0],
+            led_colour: leds[1],
+            led_light: leds[2],
             blend_weights,
         }
     }
@@ -159,7 +179,7 @@ impl SensorUniform {
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
     /// fields that shape control flow, and the shading's exponents, fixed per sensor so the
     /// driver can fold the lens switch, unroll the loops and multiply whole powers out.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 7] {
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 9] {
         // Nested exactly as the shader steps them: the wide step twice the narrow one in f32.
         let nested = self.wide_step_mm == 2.0 * self.narrow_step_mm;
         [
@@ -168,8 +188,17 @@ impl SensorUniform {
             ("NARROW_TAPS", self.narrow_taps as f64),
             ("WIDE_TAPS", self.wide_taps as f64),
             ("WIDE_TAPS_NESTED", if nested { 1.0 } else { 0.0 }),
+            ("LED_COUNT", self.led_count as f64),
             ("LED_SPREAD", self.spread as f64),
             ("PAINT_SHININESS", self.shininess as f64),
+            (
+                "VIGNETTING",
+                if self.vignetting[..2] == [0.0, 0.0] {
+                    0.0
+                } else {
+                    1.0
+                },
+            ),
         ]
     }
 }
@@ -180,6 +209,11 @@ pub fn object_kind(object: &Object) -> u32 {
         Object::Solid(s) => s.id(),
         Object::Mesh { .. } => GRID_OBJECT,
     }
+}
+
+/// A vector as a uniform's vec4: xyz and `w`.
+fn vec4(v: glam::DVec3, w: f32) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w]
 }
 
 /// Pixels from one row of a frame's image buffers to the next, for a rect `width` pixels

@@ -10,7 +10,7 @@ use super::sampling::{SampleRng, STREAM_LOOK, STREAM_NOISE};
 use super::spec::Spec;
 use crate::error::{GeltipError, Result};
 use crate::render::Frame;
-use crate::sensor::Sensor;
+use crate::sensor::{Noise, Sensor};
 use std::fs;
 use std::path::Path;
 
@@ -28,7 +28,7 @@ pub(super) struct Look {
     reference: Vec<u8>,
     /// What the change is added to: the background, or the reference.
     base: Vec<u8>,
-    noise: f64,
+    noise: Noise,
     light_jitter: f64,
     paint_jitter: f64,
 }
@@ -38,7 +38,7 @@ impl Look {
     /// `reference` and the loaded `background` (RGB).
     pub(super) fn new(spec: &Spec, reference: &Frame, background: Option<Vec<u8>>) -> Option<Look> {
         let needed = background.is_some()
-            || spec.noise > 0.0
+            || spec.noise.any()
             || spec.light_jitter > 0.0
             || spec.paint_jitter > 0.0;
         needed.then(|| {
@@ -84,15 +84,16 @@ impl Look {
         mut noise: SampleRng,
     ) -> Vec<u8> {
         // Approximately Gaussian: the sum of four 16-bit uniforms, scaled to unit variance.
-        let scale = self.noise * 3.0_f64.sqrt() / 65536.0;
+        let scale = self.noise.rgb().map(|s| s * 3.0_f64.sqrt() / 65536.0);
+        let noisy = self.noise.any();
         let mut out = Vec::with_capacity(self.base.len());
         for (j, value) in rendered.enumerate() {
             let change = value as f64 - self.reference[j] as f64;
             let mut v = (self.base[j] as f64 + contrast * change) * gains[j % 3];
-            if self.noise > 0.0 {
+            if noisy {
                 let r = noise.next_u64();
                 let sum = (r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48);
-                v += (sum as f64 - 2.0 * 65535.0) * scale;
+                v += (sum as f64 - 2.0 * 65535.0) * scale[j % 3];
             }
             out.push(v.round().clamp(0.0, 255.0) as u8);
         }

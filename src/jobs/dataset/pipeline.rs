@@ -13,7 +13,7 @@ use crate::output;
 use crate::render::gpu::{PreparedBatch, Renderer, MAX_BATCH};
 use crate::render::pool::RenderPool;
 use crate::render::{Frame, GroundTruth};
-use crate::sensor::Sensor;
+use crate::sensor::{Noise, Sensor};
 use std::path::Path;
 use std::sync::{mpsc, Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -43,7 +43,7 @@ pub(super) fn render_samples(
     // Noise is added per sample on the CPU; the renderers render without it. Every object's
     // contact pipeline is built now, at start-up, not in the first batch's frames.
     let mut config = spec.sensor.config.clone();
-    config.render.noise = 0.0;
+    config.render.noise = Noise::NONE;
     let render_sensor = Sensor::from_config(spec.sensor.name.clone(), config)?;
     let mut pool = RenderPool::start(&render_sensor, spec.streams, objects)?;
     report.startup = start.elapsed();

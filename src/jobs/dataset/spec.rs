@@ -3,7 +3,7 @@
 use crate::error::{GeltipError, Result};
 use crate::gpu::context::MAX_STREAMS;
 use crate::object::Solid;
-use crate::sensor::Sensor;
+use crate::sensor::{Noise, Sensor};
 use image::codecs::png::{CompressionType, FilterType};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -141,8 +141,8 @@ pub struct Spec {
     /// Write `masks/<k>.png`: 255 where the skin is pressed in more than
     /// [`crate::render::MASK_THRESHOLD_MM`].
     pub masks: bool,
-    /// Standard deviation of additive sensor noise, 8-bit grey levels.
-    pub noise: f64,
+    /// Standard deviation of additive sensor noise, 8-bit levels (one, or one per channel).
+    pub noise: Noise,
     /// Per-sample gain of each colour channel drawn from `1 ± light_jitter` (the three LEDs).
     pub light_jitter: f64,
     /// Per-sample gain of the tactile change (frame minus the empty finger) drawn from
@@ -179,7 +179,7 @@ impl Spec {
             shard: Shard::ALL,
             depth_maps: false,
             masks: false,
-            noise: 0.0,
+            noise: Noise::NONE,
             light_jitter: 0.0,
             paint_jitter: 0.0,
             background: None,
@@ -233,8 +233,11 @@ impl Spec {
                 format!("needs 1 <= min <= max <= {MAX_CONTACTS_PER_SAMPLE}"),
             ));
         }
+        let noise = self.noise.rgb();
         for (what, v, max) in [
-            ("--noise", self.noise, 255.0),
+            ("--noise", noise[0], 255.0),
+            ("--noise", noise[1], 255.0),
+            ("--noise", noise[2], 255.0),
             ("--light-jitter", self.light_jitter, 1.0),
             ("--paint-jitter", self.paint_jitter, 1.0),
         ] {

@@ -345,7 +345,7 @@ impl Renderer {
         if plan.pixels.is_some() {
             p.camera.record_touched(rec, res, plan.slot, frame);
         }
-        if self.sensor.config.render.noise > 0.0 {
+        if self.sensor.config.render.noise.any() {
             let size = (self.sensor.width, self.sensor.height);
             p.leds.record_noise(rec, frame, size);
         }

@@ -238,7 +238,7 @@ impl Renderer {
     /// fresh sensor noise when the sensor has noise (each call draws new noise, like a real
     /// reference frame; without noise it is the reference itself).
     pub fn render_empty(&mut self) -> Result<Frame> {
-        if self.sensor.config.render.noise <= 0.0 {
+        if !self.sensor.config.render.noise.any() {
             return Ok(self.reference.clone());
         }
         let seed = self.next_noise_seed();
@@ -268,7 +268,7 @@ impl Renderer {
     /// only this rect is copied, cleared and read back (its rows
     /// [`crate::render::uniforms::image_pitch`] apart).
     fn changed_rect(&self, pixel_rect: Option<Rect>) -> Option<Rect> {
-        if self.sensor.config.render.noise > 0.0 {
+        if self.sensor.config.render.noise.any() {
             return Some(whole_image(&self.sensor));
         }
         pixel_rect.filter(|r| r.w > 0 && r.h > 0)

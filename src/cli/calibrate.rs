@@ -1,0 +1,62 @@
+//! `geltip calibrate`: fit a sensor file to a real sensor's frames and write it with its
+//! report and pictures.
+
+use anyhow::Result;
+use clap::Args;
+use geltip::calibrate::Options;
+use geltip::jobs::calibrate;
+use geltip::sensor::Sensor;
+use serde_json::json;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct CalibrateArgs {
+    /// The sensor to start from (a preset or a TOML file): its finger, lens model and field
+    /// of view, and every value the frames do not fit.
+    #[arg(long, default_value = "paper")]
+    sensor: String,
+    /// A frame of the empty finger (PNG); repeat for several frames of the same camera (their
+    /// spread gives the noise).
+    #[arg(long, required = true)]
+    empty: Vec<PathBuf>,
+    /// Frames with known contacts: JSON lines {"image": path, "object", "at", "depth", ...}
+    /// or {"image", "object", "pose"}, paths relative to the file. Fits the imprint's
+    /// elastomer values.
+    #[arg(long)]
+    contacts: Option<PathBuf>,
+    /// How many LEDs to fit.
+    #[arg(long, default_value_t = 3)]
+    leds: usize,
+    /// Directory for sensor.toml, report.json and the pictures (real, calibrated, residual,
+    /// comparison).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Calibrates, writes the directory and prints a summary line.
+pub fn calibrate(args: CalibrateArgs) -> Result<()> {
+    let start = Sensor::load(&args.sensor)?;
+    let mut options = Options::new(start, args.empty);
+    options.contacts = args.contacts;
+    options.leds = args.leds;
+    let outcome = calibrate::run(&options, &args.out, &|stage| eprintln!("{stage}..."))?;
+    let c = &outcome.calibration;
+    println!(
+        "{}",
+        json!({
+            "sensor": args.out.join("sensor.toml"),
+            "image_circle": {
+                "centre": [round(c.circle.centre.x), round(c.circle.centre.y)],
+                "radius": round(c.circle.radius),
+            },
+            "psnr_db": {"before": round(outcome.before.psnr_db), "after": round(outcome.after.psnr_db)},
+            "ssim": {"before": round(outcome.before.ssim), "after": round(outcome.after.ssim)},
+            "seconds": round(outcome.seconds),
+        })
+    );
+    Ok(())
+}
+
+fn round(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}

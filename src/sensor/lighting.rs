@@ -1,0 +1,392 @@
+//! The light a sensor file describes: its LEDs (the paper's ring of three, `[leds]`, or any
+//! list, `[[leds]]`), the ambient light and the camera's vignetting (`[light]`), the paint's
+//! colour, and the sensor's noise; resolved into one [`Lighting`] that the renderer and its
+//! CPU mirror shade with.
+
+use super::config::{finite_positive, non_negative};
+use crate::error::{GeltipError, Result};
+use glam::DVec3;
+use serde::de::{self, MapAccess, SeqAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
+
+/// The most LEDs a sensor may have (the GPU's uniform holds this many).
+pub const MAX_LEDS: usize = 8;
+
+/// LED colours of the ring: one red, one green and one blue LED, or three white ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LedColours {
+    Rgb,
+    White,
+}
+
+/// `[leds]` as a table: three point lights at the base of the finger, 120 degrees apart.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LedsConfig {
+    pub colours: LedColours,
+    /// Height of the LED ring (mm, along the optical axis; the camera is at 0).
+    pub z_mm: f64,
+    /// Azimuth of the first (red) LED in degrees; the others follow at +120 and +240.
+    pub azimuth_deg: f64,
+    /// Radiant intensity scale.
+    pub intensity: f64,
+    /// Distance (mm) at which the light has fallen to half: 1 / (1 + (dist / falloff)^2).
+    pub falloff_mm: f64,
+    /// The LEDs shine up the finger (+z): emission falls as cos(angle off +z)^spread
+    /// (0 = the same in every direction).
+    pub spread: f64,
+    /// Light reaching every point regardless of the LEDs.
+    pub ambient: f64,
+}
+
+impl Default for LedsConfig {
+    fn default() -> Self {
+        LedsConfig {
+            colours: LedColours::Rgb,
+            z_mm: -2.0,
+            azimuth_deg: 90.0,
+            intensity: 2.0,
+            falloff_mm: 10.0,
+            spread: 2.0,
+            ambient: 0.06,
+        }
+    }
+}
+
+/// One LED of a `[[leds]]` list.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LedConfig {
+    /// Linear RGB colour (each channel >= 0; multiplied by `intensity`).
+    pub colour: [f64; 3],
+    /// Angle about the finger's axis, degrees (0 is image +x, 90 image +y).
+    pub azimuth_deg: f64,
+    /// Height along the optical axis (mm; the camera is at 0).
+    #[serde(default = "default_led_z")]
+    pub z_mm: f64,
+    /// Distance from the axis (mm); by default the ring's, 0.8 x (radius - shell).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_mm: Option<f64>,
+    #[serde(default = "default_led_intensity")]
+    pub intensity: f64,
+    /// Emission falls as cos(angle off +z)^spread.
+    #[serde(default = "default_led_spread")]
+    pub spread: f64,
+    /// 1 / (1 + (dist / falloff)^2).
+    #[serde(default = "default_led_falloff")]
+    pub falloff_mm: f64,
+}
+
+fn default_led_z() -> f64 {
+    LedsConfig::default().z_mm
+}
+fn default_led_intensity() -> f64 {
+    LedsConfig::default().intensity
+}
+fn default_led_spread() -> f64 {
+    LedsConfig::default().spread
+}
+fn default_led_falloff() -> f64 {
+    LedsConfig::default().falloff_mm
+}
+
+/// The sensor file's LEDs: the table `[leds]` (a ring of three) or the list `[[leds]]`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum Leds {
+    Ring(LedsConfig),
+    List(Vec<LedConfig>),
+}
+
+impl Default for Leds {
+    fn default() -> Self {
+        Leds::Ring(LedsConfig::default())
+    }
+}
+
+// By hand rather than `untagged`, so that an error inside either form keeps its field path
+// and message (untagged would only say that no form matched).
+impl<'de> Deserialize<'de> for Leds {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> std::result::Result<Self, D::Error> {
+        struct LedsVisitor;
+        impl<'de> Visitor<'de> for LedsVisitor {
+            type Value = Leds;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a [leds] table (a ring of three) or a [[leds]] list")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> std::result::Result<Leds, A::Error> {
+                LedsConfig::deserialize(de::value::MapAccessDeserializer::new(map)).map(Leds::Ring)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> std::result::Result<Leds, A::Error> {
+                Vec::<LedConfig>::deserialize(de::value::SeqAccessDeserializer::new(seq))
+                    .map(Leds::List)
+            }
+        }
+        deserializer.deserialize_any(LedsVisitor)
+    }
+}
+
+/// `[light]`: what reaches the picture besides the LEDs' direct light.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LightConfig {
+    /// Ambient light as linear RGB; replaces the ring's grey `leds.ambient` when given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ambient: Option<[f64; 3]>,
+    /// The camera's vignetting: every pixel's light is multiplied by 1 + a x^2 + b x^4, x its
+    /// distance from the principal point over the lens's image-circle radius.
+    pub vignetting: [f64; 2],
+}
+
+/// `render.noise`: one standard deviation for every channel, or one per channel (R, G, B), in
+/// 8-bit levels.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, expecting = "a number or [r, g, b] (8-bit levels, >= 0)")]
+pub enum Noise {
+    Grey(f64),
+    Rgb([f64; 3]),
+}
+
+impl Noise {
+    pub const NONE: Noise = Noise::Grey(0.0);
+
+    /// The standard deviation of each channel.
+    pub fn rgb(self) -> [f64; 3] {
+        match self {
+            Noise::Grey(s) => [s; 3],
+            Noise::Rgb(s) => s,
+        }
+    }
+
+    /// Whether any channel has noise.
+    pub fn any(self) -> bool {
+        self.rgb().iter().any(|&s| s > 0.0)
+    }
+
+    /// The largest channel's standard deviation.
+    pub fn max(self) -> f64 {
+        self.rgb().into_iter().fold(0.0, f64::max)
+    }
+}
+
+impl Default for Noise {
+    fn default() -> Self {
+        Noise::NONE
+    }
+}
+
+impl From<f64> for Noise {
+    fn from(sigma: f64) -> Self {
+        Noise::Grey(sigma)
+    }
+}
+
+/// One LED, resolved: where it is and what it emits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Led {
+    /// Position in the camera frame (mm).
+    pub position: DVec3,
+    /// Linear RGB colour.
+    pub colour: DVec3,
+    pub intensity: f64,
+    pub spread: f64,
+    pub falloff_mm: f64,
+}
+
+/// A sensor's light, resolved from either form of the file: what shading needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lighting {
+    pub leds: Vec<Led>,
+    pub ambient: DVec3,
+    /// The paint's colour (linear RGB albedo, multiplying all reflected light).
+    pub paint_colour: DVec3,
+    /// 1 + a x^2 + b x^4 (see [`LightConfig::vignetting`]).
+    pub vignetting: [f64; 2],
+}
+
+impl Lighting {
+    /// The vignetting gain at `x`, the distance from the principal point over the image
+    /// circle's radius.
+    pub fn vignette(&self, x: f64) -> f64 {
+        let x2 = x * x;
+        1.0 + self.vignetting[0] * x2 + self.vignetting[1] * x2 * x2
+    }
+
+    /// The spread every LED shares, if they share one.
+    pub fn shared_spread(&self) -> Option<f64> {
+        let first = self.leds.first()?.spread;
+        self.leds.iter().all(|l| l.spread == first).then_some(first)
+    }
+}
+
+/// The ring's distance from the axis (mm): just inside the elastomer.
+pub fn ring_radius(radius_mm: f64, shell_mm: f64) -> f64 {
+    0.8 * (radius_mm - shell_mm)
+}
+
+impl Leds {
+    /// The LEDs in the camera frame, for a finger of `radius_mm` with a `shell_mm` gel.
+    pub fn resolve(&self, radius_mm: f64, shell_mm: f64) -> Vec<Led> {
+        let ring = ring_radius(radius_mm, shell_mm);
+        match self {
+            Leds::Ring(c) => {
+                let colours = match c.colours {
+                    LedColours::Rgb => [DVec3::X, DVec3::Y, DVec3::Z],
+                    LedColours::White => [DVec3::splat(0.5); 3],
+                };
+                (0..3)
+                    .map(|i| {
+                        let a = (c.azimuth_deg + 120.0 * i as f64).to_radians();
+                        Led {
+                            position: DVec3::new(ring * a.cos(), ring * a.sin(), c.z_mm),
+                            colour: colours[i],
+                            intensity: c.intensity,
+                            spread: c.spread,
+                            falloff_mm: c.falloff_mm,
+                        }
+                    })
+                    .collect()
+            }
+            Leds::List(list) => list
+                .iter()
+                .map(|l| {
+                    let a = l.azimuth_deg.to_radians();
+                    let r = l.radius_mm.unwrap_or(ring);
+                    Led {
+                        position: DVec3::new(r * a.cos(), r * a.sin(), l.z_mm),
+                        colour: DVec3::from_array(l.colour),
+                        intensity: l.intensity,
+                        spread: l.spread,
+                        falloff_mm: l.falloff_mm,
+                    }
+                })
+                .collect(),
+        }
+    }
+
+    /// The ring's grey ambient light (the list form has none of its own).
+    pub fn ring_ambient(&self) -> Option<f64> {
+        match self {
+            Leds::Ring(c) => Some(c.ambient),
+            Leds::List(_) => None,
+        }
+    }
+
+    /// Checks every LED; `radius_mm` and `cylinder_length_mm` are the finger's.
+    pub fn validate(&self, radius_mm: f64, cylinder_length_mm: f64) -> Result<()> {
+        match self {
+            Leds::Ring(c) => {
+                check_height("leds.z_mm", c.z_mm, cylinder_length_mm)?;
+                finite("leds.azimuth_deg", c.azimuth_deg)?;
+                non_negative("leds.intensity", c.intensity)?;
+                finite_positive("leds.falloff_mm", c.falloff_mm)?;
+                non_negative("leds.spread", c.spread)?;
+                non_negative("leds.ambient", c.ambient)
+            }
+            Leds::List(list) => {
+                if list.is_empty() || list.len() > MAX_LEDS {
+                    return Err(GeltipError::config(
+                        "leds",
+                        format!("a sensor has 1 to {MAX_LEDS} LEDs, got {}", list.len()),
+                    ));
+                }
+                for (i, l) in list.iter().enumerate() {
+                    let field = |name: &str| format!("leds[{i}].{name}");
+                    for (k, c) in l.colour.iter().enumerate() {
+                        non_negative(&format!("leds[{i}].colour[{k}]"), *c)?;
+                    }
+                    finite(&field("azimuth_deg"), l.azimuth_deg)?;
+                    check_height(&field("z_mm"), l.z_mm, cylinder_length_mm)?;
+                    if let Some(r) = l.radius_mm {
+                        non_negative(&field("radius_mm"), r)?;
+                        if r >= radius_mm {
+                            return Err(GeltipError::config(
+                                field("radius_mm"),
+                                format!(
+                                    "the LEDs sit inside the finger (radius_mm < {radius_mm}), got {r}"
+                                ),
+                            ));
+                        }
+                    }
+                    non_negative(&field("intensity"), l.intensity)?;
+                    non_negative(&field("spread"), l.spread)?;
+                    finite_positive(&field("falloff_mm"), l.falloff_mm)?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl LightConfig {
+    /// Whether this is the default (no `[light]` table): left out when a config is written.
+    pub fn is_default(&self) -> bool {
+        *self == LightConfig::default()
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        if let Some(a) = self.ambient {
+            for (k, c) in a.iter().enumerate() {
+                non_negative(&format!("light.ambient[{k}]"), *c)?;
+            }
+        }
+        for (k, v) in self.vignetting.iter().enumerate() {
+            finite(&format!("light.vignetting[{k}]"), *v)?;
+        }
+        // The gain must stay positive across the image circle: at its lowest (x = 1 or the
+        // quartic's turning point) it decides whether a ring of pixels turns black or negative.
+        let [a, b] = self.vignetting;
+        let mut lowest = (1.0 + a + b).min(1.0);
+        if b > 0.0 && a < 0.0 && -a < 2.0 * b {
+            let x2 = -a / (2.0 * b);
+            lowest = lowest.min(1.0 + a * x2 + b * x2 * x2);
+        }
+        if lowest <= 0.0 {
+            return Err(GeltipError::config(
+                "light.vignetting",
+                format!(
+                    "1 + a x^2 + b x^4 falls to {lowest:.3} inside the image circle; it must stay above 0"
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Noise {
+    pub fn validate(self) -> Result<()> {
+        match self {
+            Noise::Grey(s) => non_negative("render.noise", s),
+            Noise::Rgb(s) => {
+                for (k, v) in s.iter().enumerate() {
+                    non_negative(&format!("render.noise[{k}]"), *v)?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+fn finite(field: &str, v: f64) -> Result<()> {
+    if !v.is_finite() {
+        return Err(GeltipError::config(
+            field,
+            format!("must be a finite number, got {v}"),
+        ));
+    }
+    Ok(())
+}
+
+fn check_height(field: &str, z: f64, cylinder_length_mm: f64) -> Result<()> {
+    finite(field, z)?;
+    if z >= cylinder_length_mm {
+        return Err(GeltipError::config(
+            field,
+            format!(
+                "the LEDs sit at the base, below the hemisphere (z < {cylinder_length_mm}), got {z}"
+            ),
+        ));
+    }
+    Ok(())
+}
