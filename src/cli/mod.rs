@@ -38,6 +38,7 @@ pub enum Command {
     /// Examples:
     ///   geltip render --sensor paper --object sphere --at rotation=45 --depth 1 -o sphere.png --labels sphere.json
     ///   geltip render --sensor paper --reference -o ref.png
+    ///   geltip render --sensor out/sensor.toml --object sphere --at rotation=45 --depth 1 --background empty.png -o on_real.png
     #[command(allow_negative_numbers = true, verbatim_doc_comment)]
     Render(render::RenderArgs),
     /// Find the contact in a tactile image and map it onto the finger.

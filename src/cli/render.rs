@@ -5,6 +5,7 @@ use anyhow::{anyhow, Context, Result};
 use clap::Args;
 use geltip::object::ObjectCache;
 use geltip::output;
+use geltip::render::background::{composite, load_background, Background};
 use geltip::render::gpu::Renderer;
 use geltip::render::{Frame, Press};
 use geltip::scene::{load_scene, pose_numbers, At, ContactSpec};
@@ -65,15 +66,28 @@ pub struct RenderArgs {
     /// Indentation (mm) each pixel sees, as a float32 NumPy array (height x width).
     #[arg(long = "depth-map")]
     depth_map: Option<PathBuf>,
+    /// A real sensor's empty frame (an image of the sensor's size): the output is it plus
+    /// the render's change from the rendered empty finger, as `geltip dataset --background`
+    /// makes its images. With --reference the output is the background itself, plus fresh
+    /// noise when the sensor file sets render.noise (the background's own noise stays).
+    /// Labels and depth maps do not change.
+    #[arg(long)]
+    background: Option<PathBuf>,
 }
 
 /// Renders the frame, writes it (and the labels and depth map asked for) and prints the
 /// labels as JSON.
 pub fn render(args: RenderArgs) -> Result<()> {
     let sensor = Sensor::load(&args.sensor)?;
+    let background = args
+        .background
+        .as_deref()
+        .map(|path| load_background(path, &sensor))
+        .transpose()?;
     if args.reference {
         let mut renderer = Renderer::new(&sensor)?;
-        write_frame(&renderer.render_empty()?, &args)?;
+        let frame = renderer.render_empty()?;
+        write_frame(&frame, &args, background.as_ref(), &renderer)?;
         println!("{}", json!({ "image": args.output, "reference": true }));
         return Ok(());
     }
@@ -84,7 +98,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     };
     let mut renderer = Renderer::new(&sensor)?;
     let (frame, truths) = renderer.render_scene(&presses)?;
-    write_frame(&frame, &args)?;
+    write_frame(&frame, &args, background.as_ref(), &renderer)?;
     let labels = if args.scene.is_some() {
         geltip::render::scene_labels(&frame, &truths)
     } else {
@@ -148,13 +162,19 @@ fn under_flag(e: GeltipError) -> anyhow::Error {
     }
 }
 
-fn write_frame(frame: &Frame, args: &RenderArgs) -> Result<()> {
-    output::write_png_rgb8(
-        &args.output,
-        frame.width,
-        frame.height,
-        frame.to_rgb().as_raw(),
-    )?;
+/// Writes the image (on `background` when given, against `renderer`'s empty finger) and
+/// the depth map asked for.
+fn write_frame(
+    frame: &Frame,
+    args: &RenderArgs,
+    background: Option<&Background>,
+    renderer: &Renderer,
+) -> Result<()> {
+    let rgb = match background {
+        Some(b) => composite(&b.image, frame, renderer.reference())?,
+        None => frame.to_rgb(),
+    };
+    output::write_png_rgb8(&args.output, rgb.width(), rgb.height(), rgb.as_raw())?;
     if let Some(path) = &args.depth_map {
         output::write_npy_f32(path, frame.width, frame.height, &frame.indentation)?;
     }

@@ -9,7 +9,9 @@
 //! The heightfield lives on the unrolled disc (see [`crate::finger`]); only the object's
 //! footprint on it, and the pixels that can see that footprint, are computed per contact:
 //! the rest of every frame is the no-contact reference, rendered once per sensor.
+//! [`background`] puts a frame's change from that reference on a real sensor's empty frame.
 
+pub mod background;
 pub mod camera;
 pub mod contact;
 pub mod cpu;

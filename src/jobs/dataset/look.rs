@@ -1,6 +1,7 @@
 //! The per-sample post-process of an image, on the CPU: the rendered tactile change on a base
 //! image (the rendered empty finger or a real sensor's empty frame), light and paint jitter,
-//! sensor noise, each drawn from `(seed, k)`.
+//! sensor noise, each drawn from `(seed, k)`. The arithmetic is
+//! [`crate::render::background::compose`], the one `geltip render --background` uses.
 //!
 //! The renderer renders noise-free: its own noise is drawn from a counter that depends on the
 //! order frames are rendered in, and a per-sample sensor would need a new renderer (1-2 s)
@@ -8,18 +9,9 @@
 
 use super::sampling::{SampleRng, STREAM_LOOK, STREAM_NOISE};
 use super::spec::Spec;
-use crate::error::{GeltipError, Result};
+use crate::render::background::{compose, rgb_values};
 use crate::render::Frame;
-use crate::sensor::{Noise, Sensor};
-use std::fs;
-use std::path::Path;
-
-/// 64-bit FNV-1a of `bytes` (identifies a background image in `dataset.json`).
-pub fn fnv1a64(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
-}
+use crate::sensor::Noise;
 
 /// The CPU post-process of a sample's image: the tactile change on a base image, light and
 /// paint jitter, sensor noise. `None` when there is nothing to do.
@@ -60,11 +52,7 @@ impl Look {
             std::array::from_fn(|_| 1.0 + self.light_jitter * (2.0 * rng.unit() - 1.0));
         let contrast = 1.0 + self.paint_jitter * (2.0 * rng.unit() - 1.0);
         let noise = SampleRng::new(&[seed, k, STREAM_NOISE]);
-        let change = frame
-            .rgba
-            .chunks_exact(4)
-            .flat_map(|px| [px[0], px[1], px[2]]);
-        self.compose(change, gains, contrast, noise)
+        self.compose(rgb_values(frame), gains, contrast, noise)
     }
 
     /// The set's empty frame: the base with the set's noise (drawn from its own stream, as
@@ -85,40 +73,18 @@ impl Look {
     ) -> Vec<u8> {
         // Approximately Gaussian: the sum of four 16-bit uniforms, scaled to unit variance.
         let scale = self.noise.rgb().map(|s| s * 3.0_f64.sqrt() / 65536.0);
-        let noisy = self.noise.any();
-        let mut out = Vec::with_capacity(self.base.len());
-        for (j, value) in rendered.enumerate() {
-            let change = value as f64 - self.reference[j] as f64;
-            let mut v = (self.base[j] as f64 + contrast * change) * gains[j % 3];
-            if noisy {
-                let r = noise.next_u64();
-                let sum = (r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48);
-                v += (sum as f64 - 2.0 * 65535.0) * scale[j % 3];
-            }
-            out.push(v.round().clamp(0.0, 255.0) as u8);
-        }
-        out
+        let draw = |c: usize| {
+            let r = noise.next_u64();
+            let sum = (r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48);
+            (sum as f64 - 2.0 * 65535.0) * scale[c]
+        };
+        compose(
+            &self.base,
+            rendered,
+            &self.reference,
+            contrast,
+            gains,
+            self.noise.any().then_some(draw),
+        )
     }
-}
-
-/// Loads a background image: an RGB frame of the sensor's size.
-pub(super) fn load_background(path: &Path, sensor: &Sensor) -> Result<(Vec<u8>, u64)> {
-    let bytes = fs::read(path).map_err(|e| GeltipError::io(path, e))?;
-    let img = image::load_from_memory(&bytes).map_err(|e| GeltipError::InvalidImage {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    if (img.width(), img.height()) != (sensor.width, sensor.height) {
-        return Err(GeltipError::InvalidImage {
-            path: path.to_path_buf(),
-            reason: format!(
-                "is {}x{}, the sensor's images are {}x{}",
-                img.width(),
-                img.height(),
-                sensor.width,
-                sensor.height
-            ),
-        });
-    }
-    Ok((img.to_rgb8().into_raw(), fnv1a64(&bytes)))
 }

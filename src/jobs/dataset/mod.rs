@@ -35,7 +35,7 @@ pub mod sampling;
 pub mod spec;
 pub mod store;
 
-pub use look::fnv1a64;
+pub use crate::render::background::fnv1a64;
 pub use reference::{reference_of_set, REFERENCE};
 pub use sampling::{
     load_objects, make_contact, sample_contact, sample_contacts, visible_arc_length, SampleRng,
@@ -48,6 +48,7 @@ pub use spec::{
 pub use store::{merge, LABELS, MANIFEST};
 
 use crate::error::Result;
+use crate::render::background::load_background;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
@@ -110,9 +111,9 @@ pub fn run(spec: &Spec, out: Option<&Path>, mut progress: impl FnMut(Progress)) 
     let background = spec
         .background
         .as_ref()
-        .map(|p| look::load_background(p, &spec.sensor))
+        .map(|p| load_background(p, &spec.sensor))
         .transpose()?;
-    let options = spec.options_json(background.as_ref().map(|b| b.1));
+    let options = spec.options_json(background.as_ref().map(|b| b.fnv1a64));
 
     let range = spec.shard.range(spec.count);
     let mut report = Report {
@@ -135,7 +136,7 @@ pub fn run(spec: &Spec, out: Option<&Path>, mut progress: impl FnMut(Progress)) 
             spec,
             out,
             &objects,
-            background.map(|b| b.0),
+            background.map(|b| b.image.into_raw()),
             &todo,
             &mut report,
             &mut progress,

@@ -1,10 +1,11 @@
 //! A set's empty frame (`reference.png`): the empty finger with the set's look (background,
 //! sensor noise; no per-sample jitter), what detectors subtract from the set's images.
 
-use super::look::{load_background, Look};
+use super::look::Look;
 use super::spec::Spec;
 use super::store::MANIFEST;
 use crate::error::{GeltipError, Result};
+use crate::render::background::load_background;
 use crate::render::gpu::Renderer;
 use crate::sensor::{Noise, Sensor};
 use image::RgbImage;
@@ -54,7 +55,7 @@ pub fn reference_of_set(dir: &Path) -> Result<RgbImage> {
     let background = spec
         .background
         .as_ref()
-        .map(|p| load_background(p, &sensor).map(|b| b.0))
+        .map(|p| load_background(p, &sensor).map(|b| b.image.into_raw()))
         .transpose()?;
     let mut renderer = Renderer::new(&sensor)?;
     let rendered = renderer.render_empty()?;
