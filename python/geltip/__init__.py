@@ -9,6 +9,7 @@ float32 in mm, points (N, 3) float64 in mm, pixels (N, 2) float64 (OpenCV conven
     reference = sim.reference()
     image, labels, depth = sim.render(object="sphere", at="rotation=30", depth=1.0)
     found = geltip.localise(sensor, reference, image)
+    mine = geltip.calibrate("empty.png")   # a Sensor fitted to a real GelTip's frame
 
 Errors are ``geltip.GeltipError`` subclasses carrying the command line's one-line message:
 ``InvalidArgumentError`` (a ``ValueError``), ``GpuError`` (a ``RuntimeError``) and
@@ -28,6 +29,7 @@ from ._geltip import (
     Sensor,
     Simulator,
     __version__,
+    calibrate,
     host_speed,
     keep_freed_memory,
     load_image,
@@ -63,6 +65,7 @@ __all__ = [
     "Sensor",
     "Simulator",
     "__version__",
+    "calibrate",
     "evaluate",
     "host_speed",
     "keep_freed_memory",

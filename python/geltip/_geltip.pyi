@@ -59,6 +59,11 @@ class Sensor:
     @property
     def config(self) -> Dict[str, Any]:
         """The whole configuration (the TOML file's tables) as a dict."""
+    @property
+    def calibration(self) -> Optional[Dict[str, Any]]:
+        """The report of the calibration that made this sensor (`calibrate`): report.json's
+        content (image circle, PSNR and SSIM inside it before and after, every fitted value
+        with its standard error, what the frames leave loose). None for any other sensor."""
     @overload
     def project(
         self, points: npt.ArrayLike, *, reasons: Literal[False] = False
@@ -170,3 +175,24 @@ def evaluate(
     """The native half of `geltip.evaluate`: `detector` answers each frame with its
     detections as JSON text (or names a built-in localiser). Returns {"summary", "tables",
     "per_sample", "files"}."""
+
+def calibrate(
+    empty: Union[_Path, Sequence[_Path]],
+    sensor: Union[Sensor, _Path, None] = None,
+    *,
+    contacts: Optional[_Path] = None,
+    out: Optional[_Path] = None,
+    leds: Optional[int] = None,
+    samples: Optional[int] = None,
+    starts: Optional[int] = None,
+) -> Sensor:
+    """A sensor fitted to a real GelTip's own frames, as `geltip calibrate`: `empty` is a
+    frame of the empty finger (an image file) or several of the same camera (their spread
+    gives the noise); `sensor` the one to start from (default "paper"): its finger, lens
+    model and field of view, and every value the frames do not fit. `contacts`: a JSON-lines
+    file of frames with known contacts, to fit the imprint. `out`: a directory for
+    sensor.toml, report.json and the pictures (real, calibrated, residual, comparison);
+    None keeps no file. `leds` (LEDs to fit), `samples` (pixels compared) and `starts`
+    (starting rotations of the LEDs): None for the command's defaults; fewer samples and
+    starts are faster and rougher. Returns the calibrated Sensor, named "calibrated", whose
+    `calibration` is the report. Runs with the GIL released."""

@@ -124,6 +124,17 @@ pub fn number(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
         .map_err(|_| bad(field, format!("expected a number, got {}", repr(value))))
 }
 
+/// A count argument (a whole number, 0 or more: int or NumPy integer); its range beyond
+/// that is the library's to check.
+pub fn count(field: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    value.extract().map_err(|_| {
+        bad(
+            field,
+            format!("expected a whole number >= 0, got {}", repr(value)),
+        )
+    })
+}
+
 /// `repr(value)`, for messages.
 pub fn repr(value: &Bound<'_, PyAny>) -> String {
     value

@@ -12,8 +12,10 @@
 //! - `sensor`: `Sensor`. `simulator`: `Simulator`; `batch`: its `render_batch`.
 //! - `localise`: `localise`, `load_image`. `host`: `keep_freed_memory`, `host_speed`.
 //! - `evaluate`: `evaluate`, a detector (a function or a built-in) scored on a set or suite.
+//! - `calibrate`: `calibrate`, a sensor fitted to a real sensor's empty frames.
 
 mod batch;
+mod calibrate;
 mod contact;
 mod convert;
 mod errors;
@@ -33,6 +35,7 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulator::Simulator>()?;
     m.add_function(wrap_pyfunction!(localise::localise, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(localise::load_image, m)?)?;
     m.add_function(wrap_pyfunction!(host::keep_freed_memory, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_speed, m)?)?;

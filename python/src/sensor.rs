@@ -22,6 +22,9 @@ pub struct Sensor {
     pub inner: geltip::Sensor,
     /// Keeps the surface detector's per-pixel table between `localise` calls.
     pub localiser: Localiser,
+    /// The report of the calibration that made this sensor (`geltip.calibrate`): the text
+    /// of its `report.json`.
+    calibration: Option<String>,
 }
 
 impl Sensor {
@@ -29,6 +32,15 @@ impl Sensor {
         Sensor {
             localiser: Localiser::new(&inner),
             inner,
+            calibration: None,
+        }
+    }
+
+    /// A sensor `geltip.calibrate` fitted, with its report (`report.json`'s text).
+    pub fn calibrated(inner: geltip::Sensor, report: String) -> Sensor {
+        Sensor {
+            calibration: Some(report),
+            ..Sensor::wrap(inner)
         }
     }
 
@@ -110,6 +122,19 @@ impl Sensor {
         let v =
             serde_json::to_value(&self.inner.config).map_err(|e| bad("config", e.to_string()))?;
         json_to_py(py, &v)
+    }
+
+    /// The report of the calibration that made this sensor (`report.json`'s content:
+    /// image circle, PSNR and SSIM before and after, each fitted value with its standard
+    /// error, what the frames leave loose), or None for a sensor not made by
+    /// `geltip.calibrate`.
+    #[getter]
+    fn calibration<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        match &self.calibration {
+            // Python's own parser: the dict holds exactly the numbers the file holds.
+            Some(text) => py.import("json")?.call_method1("loads", (text,)),
+            None => Ok(py.None().into_bound(py)),
+        }
     }
 
     fn __repr__(&self) -> String {

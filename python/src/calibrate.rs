@@ -1,0 +1,124 @@
+//! `geltip.calibrate`: a sensor fitted to a real GelTip's own frames by the library's
+//! `geltip calibrate` job, returned as a `geltip.Sensor` that carries the job's report.
+//! Without `out`, the job writes into a temporary directory removed afterwards; the report
+//! is its `report.json`'s text, so Python gets exactly what the command writes.
+
+use crate::convert::{count, path_or_str, repr};
+use crate::errors::{bad, detached};
+use crate::sensor::Sensor;
+use geltip::calibrate::Options;
+use geltip::jobs::calibrate as job;
+use geltip::GeltipError;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The report's file among the job's.
+const REPORT: &str = "report.json";
+
+/// A sensor fitted to a real GelTip's own frames, as `geltip calibrate`: `empty` is a frame
+/// of the empty finger (an image file) or a list of several from the same camera; `sensor`
+/// the one to start from (a `Sensor`, a preset name or a TOML path; default "paper").
+/// `contacts`: a JSON-lines file of frames with known contacts (fits the imprint). `out`: a
+/// directory for sensor.toml, report.json and the pictures (None: no file is kept).
+/// `leds`, `samples`, `starts`: None for the command's defaults. Returns the calibrated
+/// `Sensor`, whose `calibration` is the report.
+#[pyfunction]
+#[pyo3(signature = (empty, sensor = None, *, contacts = None, out = None, leds = None, samples = None, starts = None))]
+#[allow(clippy::too_many_arguments)] // The keyword arguments of geltip.calibrate, one each.
+pub fn calibrate(
+    py: Python<'_>,
+    empty: &Bound<'_, PyAny>,
+    sensor: Option<&Bound<'_, PyAny>>,
+    contacts: Option<&Bound<'_, PyAny>>,
+    out: Option<&Bound<'_, PyAny>>,
+    leds: Option<&Bound<'_, PyAny>>,
+    samples: Option<&Bound<'_, PyAny>>,
+    starts: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Sensor> {
+    let start = Sensor::of(py, sensor)?.get().inner.clone();
+    let mut options = Options::new(start, paths(empty)?);
+    options.contacts = contacts
+        .map(|c| path_or_str("contacts", c).map(PathBuf::from))
+        .transpose()?;
+    let out = out
+        .map(|o| path_or_str("out", o).map(PathBuf::from))
+        .transpose()?;
+    for (field, value, slot) in [
+        ("leds", leds, &mut options.leds),
+        ("samples", samples, &mut options.samples),
+        ("starts", starts, &mut options.starts),
+    ] {
+        if let Some(v) = value {
+            *slot = count(field, v)?;
+        }
+    }
+    let (sensor, report) = detached(py, "calibrating", || {
+        let scratch;
+        let dir = match &out {
+            Some(dir) => dir.as_path(),
+            None => {
+                scratch = Scratch::new()?;
+                scratch.0.as_path()
+            }
+        };
+        let outcome = job::run(&options, dir, &|_| {})?;
+        let report = read_report(&outcome.files)?;
+        Ok((outcome.sensor, report))
+    })?;
+    Ok(Sensor::calibrated(sensor, report))
+}
+
+/// `empty`: one path, or a sequence of them (a `str` is one path, not its characters).
+fn paths(empty: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
+    if let Ok(one) = path_or_str("empty", empty) {
+        return Ok(vec![PathBuf::from(one)]);
+    }
+    let items = empty.try_iter().map_err(|_| {
+        bad(
+            "empty",
+            format!("expected a path or a list of paths, got {}", repr(empty)),
+        )
+    })?;
+    items
+        .enumerate()
+        .map(|(k, item)| path_or_str(&format!("empty[{k}]"), &item?).map(PathBuf::from))
+        .collect()
+}
+
+/// The text of the job's `report.json`.
+fn read_report(files: &[PathBuf]) -> geltip::Result<String> {
+    let path = files
+        .iter()
+        .find(|f| f.file_name().is_some_and(|n| n == REPORT))
+        .ok_or_else(|| GeltipError::input("calibrate", "the job wrote no report.json"))?;
+    std::fs::read_to_string(path).map_err(|e| GeltipError::io(path, e))
+}
+
+/// A directory of this process's own under the system's temporary directory, removed with
+/// everything in it when dropped (after an error too).
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new() -> geltip::Result<Scratch> {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
+        let base = std::env::temp_dir();
+        loop {
+            let k = NEXT.fetch_add(1, Ordering::Relaxed);
+            let path = base.join(format!("geltip-calibrate-{}-{k}", std::process::id()));
+            // create_dir, not create_dir_all: a directory left by a process that had this
+            // id before is never reused, so nothing is removed but what this call made.
+            match std::fs::create_dir(&path) {
+                Ok(()) => return Ok(Scratch(path)),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+                Err(e) => return Err(GeltipError::io(&path, e)),
+            }
+        }
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
