@@ -1,20 +1,14 @@
 //! `geltip.calibrate`: a sensor fitted to a real GelTip's own frames by the library's
-//! `geltip calibrate` job, returned as a `geltip.Sensor` that carries the job's report.
-//! Without `out`, the job writes into a temporary directory removed afterwards; the report
-//! is its `report.json`'s text, so Python gets exactly what the command writes.
+//! `geltip calibrate` job, returned as a `geltip.Sensor` that carries the job's report
+//! (report.json's content); with `out`, the job's files are written there too.
 
 use crate::convert::{count, path_or_str, repr};
 use crate::errors::{bad, detached};
 use crate::sensor::Sensor;
 use geltip::calibrate::Options;
 use geltip::jobs::calibrate as job;
-use geltip::GeltipError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
-
-/// The report's file among the job's.
-const REPORT: &str = "report.json";
 
 /// A sensor fitted to a real GelTip's own frames, as `geltip calibrate`: `empty` is a frame
 /// of the empty finger (an image file) or a list of several from the same camera; `sensor`
@@ -54,17 +48,11 @@ pub fn calibrate(
         }
     }
     let (sensor, report) = detached(py, "calibrating", || {
-        let scratch;
-        let dir = match &out {
-            Some(dir) => dir.as_path(),
-            None => {
-                scratch = Scratch::new()?;
-                scratch.0.as_path()
-            }
-        };
-        let outcome = job::run(&options, dir, &|_| {})?;
-        let report = read_report(&outcome.files)?;
-        Ok((outcome.sensor, report))
+        let judged = job::judge(&options, &|_| {})?;
+        if let Some(dir) = &out {
+            job::write(&judged, dir)?;
+        }
+        Ok((judged.sensor, judged.report.to_string()))
     })?;
     Ok(Sensor::calibrated(sensor, report))
 }
@@ -84,41 +72,4 @@ fn paths(empty: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
         .enumerate()
         .map(|(k, item)| path_or_str(&format!("empty[{k}]"), &item?).map(PathBuf::from))
         .collect()
-}
-
-/// The text of the job's `report.json`.
-fn read_report(files: &[PathBuf]) -> geltip::Result<String> {
-    let path = files
-        .iter()
-        .find(|f| f.file_name().is_some_and(|n| n == REPORT))
-        .ok_or_else(|| GeltipError::input("calibrate", "the job wrote no report.json"))?;
-    std::fs::read_to_string(path).map_err(|e| GeltipError::io(path, e))
-}
-
-/// A directory of this process's own under the system's temporary directory, removed with
-/// everything in it when dropped (after an error too).
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new() -> geltip::Result<Scratch> {
-        static NEXT: AtomicU64 = AtomicU64::new(0);
-        let base = std::env::temp_dir();
-        loop {
-            let k = NEXT.fetch_add(1, Ordering::Relaxed);
-            let path = base.join(format!("geltip-calibrate-{}-{k}", std::process::id()));
-            // create_dir, not create_dir_all: a directory left by a process that had this
-            // id before is never reused, so nothing is removed but what this call made.
-            match std::fs::create_dir(&path) {
-                Ok(()) => return Ok(Scratch(path)),
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
-                Err(e) => return Err(GeltipError::io(&path, e)),
-            }
-        }
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }

@@ -16,13 +16,25 @@ use rayon::prelude::*;
 /// few such values, a wrong light many.
 pub const ROBUST_SCALE: f64 = 6.0;
 
+/// One start: a model (its LED count), the LEDs' starting rotation, and where the coarse
+/// fit from there ended.
+#[derive(Debug, Clone)]
+pub struct Start {
+    pub leds: usize,
+    pub rotation_deg: f64,
+    pub cost: f64,
+    pub params: Vec<f64>,
+}
+
 /// How a fit went.
 #[derive(Debug, Clone)]
 pub struct EmptyFit {
+    /// The model chosen (its LED count).
+    pub model: Model,
     pub params: Vec<f64>,
     pub fit: Fit,
-    /// The starting rotations tried and the cost each reached on the coarse sample.
-    pub starts: Vec<(f64, f64)>,
+    /// Every start tried, with the cost it reached on the coarse sample.
+    pub starts: Vec<Start>,
 }
 
 /// The residuals of `p` on `samples`, soft-L1 damped.
@@ -50,56 +62,89 @@ fn soft_l1(r: f64) -> f64 {
     r.signum() * c * (2.0 * ((1.0 + q * q).sqrt() - 1.0)).sqrt()
 }
 
-/// Fits `model` to the frame: `coarse` samples for the starts, `fine` ones for the polish.
+/// An extra LED must lower the coarse cost by this share to be kept: a fit with more LEDs
+/// is chosen only when it explains clearly more of the frame.
+pub const EXTRA_LED_GAIN: f64 = 0.05;
+
+/// Fits the frame with each of `models` (one per LED count) from every rotation in
+/// `start_rotations` on the `coarse` samples, keeps the fewest LEDs whose best start comes
+/// within [`EXTRA_LED_GAIN`] per extra LED of the best, and polishes that start on the
+/// `fine` samples.
 pub fn fit_empty(
-    model: &Model,
+    models: &[Model],
     coarse: &Samples,
     fine: &Samples,
     start_rotations: &[f64],
     polish_iterations: usize,
 ) -> EmptyFit {
+    let jobs: Vec<(usize, f64)> = (0..models.len())
+        .flat_map(|m| start_rotations.iter().map(move |&r| (m, r)))
+        .collect();
+    let starts: Vec<Start> = jobs
+        .par_iter()
+        .map(|&(m, rotation)| coarse_start(&models[m], coarse, rotation))
+        .collect();
+    let best_of = |leds: usize| {
+        starts
+            .iter()
+            .filter(|s| s.leds == leds)
+            .min_by(|a, b| a.cost.total_cmp(&b.cost))
+            .expect("every model has a start")
+    };
+    let best = models
+        .iter()
+        .map(|m| best_of(m.leds))
+        .min_by(|a, b| {
+            let penalised = |s: &Start| s.cost * (1.0 + EXTRA_LED_GAIN).powi(s.leds as i32);
+            penalised(a).total_cmp(&penalised(b))
+        })
+        .expect("at least one model")
+        .clone();
+    let model = models
+        .iter()
+        .find(|m| m.leds == best.leds)
+        .expect("the start's model")
+        .clone();
+    let fit = levenberg_marquardt(&best.params, &model.bounds(), polish_iterations, |q| {
+        residuals(&model, fine, q)
+    });
+    EmptyFit {
+        model,
+        params: fit.params.clone(),
+        fit,
+        starts,
+    }
+}
+
+/// A coarse fit from the LEDs rotated by `rotation`: their places, spreads and fall-offs,
+/// the shine, vignetting and finger length searched; the colours and the ambient light
+/// following them by linear least squares (variable projection), which keeps a start out
+/// of the valleys where an LED's brightness and its distance trade off.
+fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
     let bounds = model.bounds();
-    // The starts search the LEDs' places, spreads and fall-offs, the shine, vignetting and
-    // finger length alone; the colours and the ambient light follow them by linear least
-    // squares (variable projection), which keeps the starts away from the valleys where an
-    // LED's brightness and its distance trade off.
     let colour_slots = colour_slots(model);
     let free: Vec<usize> = (0..model.len())
         .filter(|i| !colour_slots.contains(i))
         .collect();
     let reduced_bounds: Vec<_> = free.iter().map(|&i| bounds[i]).collect();
-    let tried: Vec<(f64, Fit)> = start_rotations
-        .par_iter()
-        .map(|&rotation| {
-            let full = model.initial(rotation);
-            let expand = |q: &[f64]| {
-                let mut p = full.clone();
-                for (&i, &v) in free.iter().zip(q) {
-                    p[i] = v;
-                }
-                linear_colours(model, coarse, &mut p);
-                p
-            };
-            let reduced: Vec<f64> = free.iter().map(|&i| full[i]).collect();
-            let fit = levenberg_marquardt(&reduced, &reduced_bounds, 40, |q| {
-                residuals(model, coarse, &expand(q))
-            });
-            let params = expand(&fit.params);
-            (rotation, Fit { params, ..fit })
-        })
-        .collect();
-    let starts: Vec<(f64, f64)> = tried.iter().map(|(r, f)| (*r, f.cost)).collect();
-    let best = tried
-        .into_iter()
-        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
-        .expect("at least one start");
-    let fit = levenberg_marquardt(&best.1.params, &bounds, polish_iterations, |q| {
-        residuals(model, fine, q)
+    let full = model.initial(rotation);
+    let expand = |q: &[f64]| {
+        let mut p = full.clone();
+        for (&i, &v) in free.iter().zip(q) {
+            p[i] = v;
+        }
+        linear_colours(model, coarse, &mut p);
+        p
+    };
+    let reduced: Vec<f64> = free.iter().map(|&i| full[i]).collect();
+    let fit = levenberg_marquardt(&reduced, &reduced_bounds, 40, |q| {
+        residuals(model, coarse, &expand(q))
     });
-    EmptyFit {
-        params: fit.params.clone(),
-        fit,
-        starts,
+    Start {
+        leds: model.leds,
+        rotation_deg: rotation,
+        cost: fit.cost,
+        params: expand(&fit.params),
     }
 }
 

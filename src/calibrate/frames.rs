@@ -42,7 +42,7 @@ impl EmptyFrames {
     pub fn load(paths: &[PathBuf]) -> Result<EmptyFrames> {
         let first = paths
             .first()
-            .ok_or_else(|| GeltipError::input("--empty", "at least one empty frame is needed"))?;
+            .ok_or_else(|| GeltipError::input("empty frames", "at least one is needed"))?;
         let mut frames = Vec::with_capacity(paths.len());
         for path in paths {
             let img = load_rgb(path)?;

@@ -32,7 +32,8 @@ pub struct Options {
     pub empty: Vec<PathBuf>,
     /// Frames with known contacts (a JSON-lines file), to fit the elastomer's values.
     pub contacts: Option<PathBuf>,
-    /// How many LEDs to fit.
+    /// How many LEDs to fit; 0 tries [`AUTO_LEDS`] and keeps the fewest that explain the
+    /// frame about as well as more would ([`fit::EXTRA_LED_GAIN`]).
     pub leds: usize,
     /// Pixels the polish compares (the starts compare a fifth as many).
     pub samples: usize,
@@ -46,12 +47,18 @@ impl Options {
             start,
             empty,
             contacts: None,
-            leds: 3,
+            leds: 0,
             samples: 16_000,
-            starts: 8,
+            starts: DEFAULT_STARTS,
         }
     }
 }
+
+/// Starting rotations of the LEDs tried for each LED count.
+pub const DEFAULT_STARTS: usize = 6;
+
+/// The LED counts tried when the count is not given.
+pub const AUTO_LEDS: std::ops::RangeInclusive<usize> = 3..=6;
 
 /// A fitted value and its standard error.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,18 +85,20 @@ pub struct Calibration {
     /// Robust cost at the end of each fit stage, and LM iterations.
     pub fit_cost: f64,
     pub fit_iterations: usize,
-    /// Starting rotations tried and the cost each reached.
-    pub starts: Vec<(f64, f64)>,
+    /// LEDs fitted.
+    pub leds: usize,
+    /// Every start tried (LED count, rotation) and the coarse cost it reached.
+    pub starts: Vec<fit::Start>,
     pub contacts: Option<contacts::ContactFit>,
 }
 
 /// Calibrates `options.start` to the frames; `progress` hears each stage's name.
 pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibration> {
-    if options.leds == 0 || options.leds > crate::sensor::MAX_LEDS {
+    if options.leds > crate::sensor::MAX_LEDS {
         return Err(GeltipError::input(
             "leds",
             format!(
-                "fits 1 to {} LEDs, got {}",
+                "fits 1 to {} LEDs (0: choose), got {}",
                 crate::sensor::MAX_LEDS,
                 options.leds
             ),
@@ -101,35 +110,39 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
     let circle = circle::find(&frames.mean)?;
     let lensed = with_lens(&options.start, &frames, &circle)?;
     progress("fitting the light");
-    let model = Model {
-        start: lensed,
-        leds: options.leds,
+    let counts: Vec<usize> = if options.leds == 0 {
+        AUTO_LEDS.collect()
+    } else {
+        vec![options.leds]
     };
-    let fine = sample(&model.start, &frames, &circle, options.samples);
-    let coarse = sample(
-        &model.start,
-        &frames,
-        &circle,
-        (options.samples / 5).max(500),
-    );
-    if fine.len() < 2 * model.len() {
+    let models: Vec<Model> = counts
+        .iter()
+        .map(|&leds| Model {
+            start: lensed.clone(),
+            leds,
+        })
+        .collect();
+    let fine = sample(&lensed, &frames, &circle, options.samples);
+    let coarse = sample(&lensed, &frames, &circle, (options.samples / 5).max(500));
+    let most = models.iter().map(Model::len).max().unwrap_or(0);
+    if coarse.len() < 4 * most {
         return Err(GeltipError::InvalidImage {
             path: frames.mean.path.clone(),
             reason: format!(
-                "the image circle holds {} usable pixels, too few to fit {} values",
+                "the image circle holds {} usable pixels, too few to fit {most} values",
                 fine.len(),
-                model.len()
             ),
         });
     }
     let rotations: Vec<f64> = (0..options.starts.max(1))
         .map(|i| 360.0 * i as f64 / options.starts.max(1) as f64)
         .collect();
-    let fitted = fit::fit_empty(&model, &coarse, &fine, &rotations, 200);
+    let fitted = fit::fit_empty(&models, &coarse, &fine, &rotations, 200);
+    let model = &fitted.model;
     let mut config = model.config(&fitted.params);
     let mut values = lens_values(&model.start, &circle);
     let errors = fitted.fit.standard_errors();
-    for ((name, value), std_error) in model::names(options.leds)
+    for ((name, value), std_error) in model::names(model.leds)
         .into_iter()
         .zip(&fitted.params)
         .zip(errors)
@@ -197,6 +210,7 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
         frames: frames.count,
         fit_cost: fitted.fit.cost,
         fit_iterations: fitted.fit.iterations,
+        leds: model.leds,
         starts: fitted.starts,
         contacts,
     })

@@ -24,9 +24,14 @@ pub struct CalibrateArgs {
     /// elastomer values.
     #[arg(long)]
     contacts: Option<PathBuf>,
-    /// How many LEDs to fit.
-    #[arg(long, default_value_t = 3)]
+    /// How many LEDs to fit; 0 tries 3 to 6 and keeps the fewest that explain the frame
+    /// about as well as more would.
+    #[arg(long, default_value_t = 0)]
     leds: usize,
+    /// Starting rotations of the LEDs tried (more find a better fit more often, and take
+    /// longer).
+    #[arg(long, default_value_t = geltip::calibrate::DEFAULT_STARTS)]
+    starts: usize,
     /// Directory for sensor.toml, report.json and the pictures (real, calibrated, residual,
     /// comparison).
     #[arg(long)]
@@ -39,19 +44,22 @@ pub fn calibrate(args: CalibrateArgs) -> Result<()> {
     let mut options = Options::new(start, args.empty);
     options.contacts = args.contacts;
     options.leds = args.leds;
+    options.starts = args.starts;
     let outcome = calibrate::run(&options, &args.out, &|stage| eprintln!("{stage}..."))?;
-    let c = &outcome.calibration;
+    let judged = &outcome.judged;
+    let c = &judged.calibration;
     println!(
         "{}",
         json!({
             "sensor": args.out.join("sensor.toml"),
+            "leds": c.leds,
             "image_circle": {
                 "centre": [round(c.circle.centre.x), round(c.circle.centre.y)],
                 "radius": round(c.circle.radius),
             },
-            "psnr_db": {"before": round(outcome.before.psnr_db), "after": round(outcome.after.psnr_db)},
-            "ssim": {"before": round(outcome.before.ssim), "after": round(outcome.after.ssim)},
-            "seconds": round(outcome.seconds),
+            "psnr_db": {"before": round(judged.before.psnr_db), "after": round(judged.after.psnr_db)},
+            "ssim": {"before": round(judged.before.ssim), "after": round(judged.after.ssim)},
+            "seconds": round(judged.seconds),
         })
     );
     Ok(())

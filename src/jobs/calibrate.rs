@@ -18,16 +18,28 @@ pub struct Likeness {
     pub ssim: f64,
 }
 
-/// What a run gives back.
+/// A calibration judged: the fitted sensor, its file's text, the renders of the start and
+/// the calibrated sensor against the frame, and the report; nothing written yet.
 #[derive(Debug)]
-pub struct Outcome {
+pub struct Judged {
     pub calibration: Calibration,
     /// The calibrated sensor, as `sensor.toml` loads.
     pub sensor: Sensor,
+    pub sensor_toml: String,
     /// The start sensor's empty finger against the frame, and the calibrated one's.
     pub before: Likeness,
     pub after: Likeness,
+    /// The calibrated sensor's empty finger.
+    pub render: image::RgbImage,
+    /// report.json's content.
+    pub report: Value,
     pub seconds: f64,
+}
+
+/// What a run gives back: the judged calibration and the files written.
+#[derive(Debug)]
+pub struct Outcome {
+    pub judged: Judged,
     pub files: Vec<PathBuf>,
 }
 
@@ -36,12 +48,20 @@ pub const MARGIN_PX: f64 = 2.0;
 
 /// Calibrates, renders the start and the calibrated sensor, writes `out`'s files.
 pub fn run(options: &Options, out: &Path, progress: &dyn Fn(&str)) -> Result<Outcome> {
+    let judged = judge(options, progress)?;
+    progress("writing");
+    let files = write(&judged, out)?;
+    Ok(Outcome { judged, files })
+}
+
+/// Calibrates and judges the result by rendering it; writes nothing.
+pub fn judge(options: &Options, progress: &dyn Fn(&str)) -> Result<Judged> {
     let started = Instant::now();
     let calibration = calibrate::calibrate(options, progress)?;
     progress("rendering the calibrated sensor");
-    let toml_text = sensor_toml(&calibration.config)?;
+    let sensor_toml = sensor_toml(&calibration.config)?;
     // The file must load back as exactly what was fitted: every command reads it.
-    let sensor = Sensor::from_toml("calibrated", &toml_text)?;
+    let sensor = Sensor::from_toml("calibrated", &sensor_toml)?;
     if sensor.config != calibration.config {
         return Err(GeltipError::input(
             "sensor.toml",
@@ -55,7 +75,7 @@ pub fn run(options: &Options, out: &Path, progress: &dyn Fn(&str)) -> Result<Out
     start.image.height = h;
     let start = Sensor::from_config(options.start.name.clone(), start)?;
     let before_img = Renderer::new(&start)?.reference().to_rgb();
-    let after_img = Renderer::new(&sensor)?.reference().to_rgb();
+    let render = Renderer::new(&sensor)?.reference().to_rgb();
     let circle = calibration.circle;
     let mask = |x: u32, y: u32| circle.contains(x, y, MARGIN_PX);
     let likeness = |img: &image::RgbImage| Likeness {
@@ -63,19 +83,34 @@ pub fn run(options: &Options, out: &Path, progress: &dyn Fn(&str)) -> Result<Out
         ssim: quality::ssim(img.as_raw(), real.as_raw(), w, h, mask),
     };
     let before = likeness(&before_img);
-    let after = likeness(&after_img);
+    let after = likeness(&render);
     let seconds = started.elapsed().as_secs_f64();
+    let report = report_json(&calibration, options, before, after, seconds);
+    Ok(Judged {
+        calibration,
+        sensor,
+        sensor_toml,
+        before,
+        after,
+        render,
+        report,
+        seconds,
+    })
+}
 
-    progress("writing");
+/// Writes `out`/sensor.toml, report.json and the pictures (real, calibrated, residual and
+/// the three side by side), each file whole or not at all.
+pub fn write(judged: &Judged, out: &Path) -> Result<Vec<PathBuf>> {
+    let real = &judged.calibration.empty;
     let mut files = Vec::new();
     let path = out.join("sensor.toml");
-    output::write_atomic(&path, toml_text.as_bytes())?;
+    output::write_atomic(&path, judged.sensor_toml.as_bytes())?;
     files.push(path);
-    let residual = residual_image(&after_img, real);
-    let side = side_by_side(&[real, &after_img, &residual]);
+    let residual = residual_image(&judged.render, real);
+    let side = side_by_side(&[real, &judged.render, &residual]);
     for (name, img) in [
         ("real.png", real),
-        ("calibrated.png", &after_img),
+        ("calibrated.png", &judged.render),
         ("residual.png", &residual),
         ("comparison.png", &side),
     ] {
@@ -84,19 +119,9 @@ pub fn run(options: &Options, out: &Path, progress: &dyn Fn(&str)) -> Result<Out
         files.push(path);
     }
     let path = out.join("report.json");
-    output::write_json(
-        &path,
-        &report_json(&calibration, options, before, after, seconds),
-    )?;
+    output::write_json(&path, &judged.report)?;
     files.push(path);
-    Ok(Outcome {
-        calibration,
-        sensor,
-        before,
-        after,
-        seconds,
-        files,
-    })
+    Ok(files)
 }
 
 /// The configuration as a sensor file, with a header saying what made it.
@@ -150,7 +175,7 @@ fn report_json(
         "empty_frames": options.empty,
         "frames_averaged": c.frames,
         "contacts": options.contacts,
-        "leds": options.leds,
+        "leds": c.leds,
         "image_circle": {
             "centre": [c.circle.centre.x, c.circle.centre.y],
             "radius": c.circle.radius,
@@ -171,7 +196,7 @@ fn report_json(
         "fit": {
             "robust_cost": c.fit_cost,
             "iterations": c.fit_iterations,
-            "starts": c.starts.iter().map(|(r, cost)| json!({"rotation_deg": r, "cost": cost})).collect::<Vec<_>>(),
+            "starts": c.starts.iter().map(|s| json!({"leds": s.leds, "rotation_deg": s.rotation_deg, "coarse_cost": s.cost})).collect::<Vec<_>>(),
         },
         "imprint": c.contacts.as_ref().map(|f| json!({
             "frames": f.frames,
