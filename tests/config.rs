@@ -172,3 +172,105 @@ fn config_round_trips_through_toml() {
     let text = toml::to_string(&c).unwrap();
     assert_eq!(SensorConfig::from_toml(&text, "x").unwrap(), c);
 }
+
+/// A sensor file with its LEDs listed (`[[leds]]`), its light (`[light]`), a coloured paint
+/// and noise per channel: loaded, checked field by field, written back the same.
+#[test]
+fn listed_leds_light_paint_colour_and_channel_noise() {
+    use geltip::sensor::{Leds, Noise};
+    let text = paper_toml()
+        + r#"
+[[leds]]
+colour = [1.0, 0.3, 0.8]
+azimuth_deg = 250.0
+z_mm = -1.5
+radius_mm = 4.0
+intensity = 2.5
+spread = 3.0
+falloff_mm = 8.0
+
+[[leds]]
+colour = [0.2, 1.0, 0.4]
+azimuth_deg = 20.0
+
+[light]
+ambient = [0.1, 0.05, 0.3]
+vignetting = [-0.3, 0.1]
+
+[paint]
+colour = [0.9, 0.8, 1.0]
+
+[render]
+noise = [1.5, 2.0, 0.5]
+"#;
+    let s = Sensor::from_toml("listed", &text).unwrap();
+    let Leds::List(list) = &s.config.leds else {
+        panic!("a list: {:?}", s.config.leds);
+    };
+    assert_eq!(list.len(), 2);
+    // The second LED takes the ring's defaults for what it leaves out.
+    assert_eq!(
+        (list[1].z_mm, list[1].intensity, list[1].spread),
+        (-2.0, 2.0, 2.0)
+    );
+    let light = s.lighting();
+    assert_eq!(light.leds.len(), 2);
+    assert!(
+        (light.leds[0].position.length() - (4.0f64.powi(2) + 1.5f64.powi(2)).sqrt()).abs() < 1e-12
+    );
+    assert_eq!(light.ambient.to_array(), [0.1, 0.05, 0.3]);
+    assert_eq!(s.config.render.noise, Noise::Rgb([1.5, 2.0, 0.5]));
+    let again = toml::to_string(&s.config).unwrap();
+    assert_eq!(Sensor::from_toml("again", &again).unwrap().config, s.config);
+
+    // The ring of the presets resolves to its three LEDs, as before.
+    let paper = Sensor::preset("paper").unwrap().lighting();
+    assert_eq!(paper.leds.len(), 3);
+    assert_eq!(paper.ambient.to_array(), [0.06; 3]);
+
+    for (bad, field) in [
+        (
+            "[[leds]]\ncolour = [1.0, -0.1, 0.0]\nazimuth_deg = 0.0\n",
+            "leds[0].colour[1]",
+        ),
+        (
+            "[[leds]]\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\nz_mm = 30.0\n",
+            "leds[0].z_mm",
+        ),
+        (
+            "[[leds]]\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\nradius_mm = 7.5\n",
+            "leds[0].radius_mm",
+        ),
+        (
+            "[[leds]]\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\nfalloff_mm = 0.0\n",
+            "leds[0].falloff_mm",
+        ),
+        ("[[leds]]\ncolour = [1.0, 0.0]\nazimuth_deg = 0.0\n", "leds"),
+        (
+            "[[leds]]\ncolour = [1.0, 0.0, 0.0]\nazimuth = 0.0\n",
+            "leds",
+        ),
+        ("[light]\nvignetting = [-1.5, 0.0]\n", "light.vignetting"),
+        ("[light]\nambient = [0.1, 0.1, nan]\n", "light.ambient[2]"),
+        ("[paint]\ncolour = [1.0, 1.0, -1.0]\n", "paint.colour[2]"),
+        ("[render]\nnoise = [1.0, -2.0, 0.0]\n", "render.noise[1]"),
+        ("[render]\nnoise = \"loud\"\n", "render.noise"),
+    ] {
+        let text = paper_toml() + "\n" + bad;
+        let err = Sensor::from_toml("bad", &text).expect_err(bad).to_string();
+        assert!(err.contains(field), "'{err}' does not name {field}");
+        assert!(!err.contains('\n'), "{err:?}");
+    }
+    let nine: String = (0..9)
+        .map(|k| {
+            format!(
+                "[[leds]]\ncolour = [1.0, 1.0, 1.0]\nazimuth_deg = {}\n",
+                40 * k
+            )
+        })
+        .collect();
+    let err = Sensor::from_toml("nine", &(paper_toml() + "\n" + &nine))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("leds") && err.contains("1 to 8"), "{err}");
+}

@@ -91,6 +91,60 @@ fn gpu_matches_the_cpu_pipeline() {
     gpu_matches_cpu(&apart);
 }
 
+/// A calibrated sensor's light: five LEDs listed with their own colours, places, spreads
+/// (so the shaders read each one's instead of a shared constant) and fall-offs, coloured
+/// ambient light and paint, and vignetting.
+#[test]
+fn gpu_matches_the_cpu_pipeline_under_a_calibrated_light() {
+    use geltip::sensor::{LedConfig, Leds};
+    let mut c = small_sensor().config.clone();
+    let led =
+        |colour: [f64; 3], azimuth_deg: f64, z_mm: f64, spread: f64, falloff_mm: f64| LedConfig {
+            colour,
+            azimuth_deg,
+            z_mm,
+            radius_mm: Some(3.0 + azimuth_deg / 200.0),
+            intensity: 1.5 + azimuth_deg / 360.0,
+            spread,
+            falloff_mm,
+        };
+    c.leds = Leds::List(vec![
+        led([1.0, 0.2, 0.7], 10.0, -2.0, 1.5, 8.0),
+        led([0.3, 1.0, 0.2], 80.0, -4.0, 3.0, 12.0),
+        led([0.2, 0.4, 1.0], 150.0, 1.0, 0.0, 6.0),
+        led([0.9, 0.9, 0.9], 230.0, -1.0, 2.5, 20.0),
+        led([0.5, 0.1, 1.0], 300.0, -6.0, 7.25, 9.0),
+    ]);
+    c.light.ambient = Some([0.08, 0.03, 0.12]);
+    c.light.vignetting = [-0.35, 0.2];
+    c.paint.colour = [0.95, 0.8, 1.0];
+    c.paint.shininess = 17.5;
+    let sensor = Sensor::from_config("small-calibrated", c).unwrap();
+    let constants = |s: &Sensor| {
+        let grid = render::HeightfieldGrid::for_sensor(s);
+        render::uniforms::SensorUniform::new(s, &grid).pipeline_constants()
+    };
+    let value = |s: &Sensor, name: &str| {
+        constants(s)
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|&(_, v)| v)
+    };
+    assert_eq!(value(&sensor, "LED_COUNT"), Some(5.0));
+    assert_eq!(value(&sensor, "LED_SPREAD"), Some(-1.0));
+    assert_eq!(value(&sensor, "VIGNETTING"), Some(1.0));
+    assert_eq!(value(&small_sensor(), "VIGNETTING"), Some(0.0));
+    gpu_matches_cpu(&sensor);
+    // The light changes the picture: the CPU mirror with the paper's ring is far from it.
+    let ring = cpu::render(&small_sensor(), None).unwrap();
+    let listed = cpu::render(&sensor, None).unwrap();
+    assert!(!close_enough(&diff(
+        &rgb(&ring.frame),
+        &rgb(&listed.frame),
+        3
+    )));
+}
+
 fn gpu_matches_cpu(sensor: &Sensor) {
     let sensor = sensor.clone();
     let mut r = Renderer::new(&sensor).unwrap();

@@ -122,27 +122,33 @@ impl Model {
         let f = &self.start.finger;
         let b = |lo: f64, hi: f64, step: f64| Bound { lo, hi, step };
         let mut out = Vec::with_capacity(self.len());
+        // The boxes keep the model physical and every fitted sensor valid: LEDs at the
+        // finger's base, inside it, below the hemisphere (z < half the radius, the finger at
+        // least a radius long); a fall-off no shorter than a millimetre (shorter ones only
+        // trade the LED's brightness for its distance); a paint that shines at most twice
+        // as much as it scatters, in a lobe no wider than cos^4; vignetting whose gain stays
+        // above 0.01 across the circle (1 + a x^2 + b x^4 with a >= -0.9, b >= -0.09).
         for _ in 0..self.leds {
             out.extend([
                 b(-1e4, 1e4, 1e-3),
-                b(-4.0 * f.radius, f.cylinder_length * 0.9, 1e-4),
+                b(-4.0 * f.radius, 0.5 * f.radius, 1e-4),
                 b(0.0, f.radius * 0.999, 1e-4),
                 b(0.0, 1e3, 1e-6),
                 b(0.0, 1e3, 1e-6),
                 b(0.0, 1e3, 1e-6),
                 b(0.0, 40.0, 1e-4),
-                b(0.2, 500.0, 1e-3),
+                b(1.0, 500.0, 1e-3),
             ]);
         }
         out.extend([
             b(0.0, 50.0, 1e-6),
             b(0.0, 50.0, 1e-6),
             b(0.0, 50.0, 1e-6),
-            b(0.0, 50.0, 1e-5),
-            b(1.0, 200.0, 1e-3),
+            b(0.0, 2.0 * self.start.config.paint.diffuse, 1e-5),
+            b(4.0, 200.0, 1e-3),
             b(-0.9, 3.0, 1e-5),
-            b(-0.9, 3.0, 1e-5),
-            b(f.radius * 0.25, f.radius * 8.0, 1e-4),
+            b(-0.09, 3.0, 1e-5),
+            b(f.radius, f.radius * 8.0, 1e-4),
         ]);
         out
     }

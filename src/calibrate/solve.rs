@@ -126,6 +126,7 @@ where
     let mut jtj = vec![0.0; n * n];
     let mut fresh_jacobian = true;
     let mut g = vec![0.0; n];
+    let mut small_gains = 0;
     while iterations < max_iterations {
         if fresh_jacobian {
             let columns = jacobian(&params, &r, bounds, &residuals);
@@ -169,12 +170,15 @@ where
             cost = tc;
             lambda = (lambda / 3.0).max(1e-9);
             fresh_jacobian = true;
-            if gain < 1e-7 {
+            // Converged when steps keep gaining next to nothing; one small gain alone may be
+            // a short step taken after rejections (a large lambda), not the bottom.
+            small_gains = if gain < 1e-7 { small_gains + 1 } else { 0 };
+            if small_gains >= 3 {
                 break;
             }
         } else {
             lambda *= 4.0;
-            if lambda > 1e10 {
+            if lambda > 1e12 {
                 break;
             }
         }
