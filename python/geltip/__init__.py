@@ -32,6 +32,7 @@ from ._geltip import (
     keep_freed_memory,
     load_image,
     localise,
+    save_image,
 )
 from .dataset import Dataset
 from .evaluate import EvaluationReport, evaluate
@@ -69,4 +70,5 @@ __all__ = [
     "load_image",
     "localise",
     "region_names",
+    "save_image",
 ]

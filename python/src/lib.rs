@@ -9,8 +9,9 @@
 //! - `errors`: library errors as Python exceptions, the GIL released around library calls.
 //! - `convert`: JSON, images, depth maps, points and pixels, numbers and paths.
 //! - `contact`: a contact's keyword arguments or dict as the library's `ContactSpec`.
-//! - `sensor`: `Sensor`. `simulator`: `Simulator`; `batch`: its `render_batch`.
-//! - `localise`: `localise`, `load_image`. `host`: `keep_freed_memory`, `host_speed`.
+//! - `sensor`: `Sensor`. `simulator`: `Simulator`; `batch`: its `render_batch`; `scenes`:
+//!   its `render_scenes`; `mesh`: its `add_mesh`'s arrays.
+//! - `localise`: `localise`, `load_image`, `save_image`. `host`: `keep_freed_memory`, `host_speed`.
 //! - `evaluate`: `evaluate`, a detector (a function or a built-in) scored on a set or suite.
 
 mod batch;
@@ -20,6 +21,8 @@ mod errors;
 mod evaluate;
 mod host;
 mod localise;
+mod mesh;
+mod scenes;
 mod sensor;
 mod simulator;
 
@@ -34,6 +37,7 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(localise::localise, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(localise::load_image, m)?)?;
+    m.add_function(wrap_pyfunction!(localise::save_image, m)?)?;
     m.add_function(wrap_pyfunction!(host::keep_freed_memory, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_speed, m)?)?;
     m.add("MAX_BATCH", MAX_BATCH)?;
