@@ -51,12 +51,12 @@ pub struct RenderArgs {
     /// A rigid pose in the camera frame instead of --at/--depth: 16 numbers (row-major
     /// 4x4 matrix) or 7 (x y z qw qx qy qz), comma- or space-separated; the depth is
     /// what the pose implies (in the labels). The labels' `pose` loads back as is.
-    #[arg(long, conflicts_with_all = ["azimuth", "spin", "tilt", "tilt_towards", "scene"])]
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["azimuth", "spin", "tilt", "tilt_towards", "scene"])]
     pose: Option<String>,
     /// With --pose: the direction the object moves in to press the finger, 3 numbers in the
     /// camera frame (comma- or space-separated); the depth is measured along it. Default:
     /// the object's own +z axis.
-    #[arg(long, requires = "pose")]
+    #[arg(long, requires = "pose", allow_hyphen_values = true)]
     approach: Option<String>,
     /// Several contacts in one frame: a JSON (.json) or TOML file listing `contacts`,
     /// each with the flags' names (object, at, depth, azimuth, spin, tilt, tilt_towards)

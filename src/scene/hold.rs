@@ -196,7 +196,7 @@ impl Hold {
         let length = a.length();
         if !length.is_finite() || length < 1e-9 {
             return Err(bad(format!(
-                "{a} has no direction: its length is {length:e}"
+                "{a} has no direction (its length is under 1e-9)"
             )));
         }
         Ok(Hold::Pose {
