@@ -10,6 +10,8 @@ float32 in mm, points (N, 3) float64 in mm, pixels (N, 2) float64 (OpenCV conven
     image, labels, depth = sim.render(object="sphere", at="rotation=30", depth=1.0)
     found = geltip.localise(sensor, reference, image)
 
+``geltip.mujoco`` (the ``mujoco`` extra) renders what a finger in a MuJoCo scene feels.
+
 Errors are ``geltip.GeltipError`` subclasses carrying the command line's one-line message:
 ``InvalidArgumentError`` (a ``ValueError``), ``GpuError`` (a ``RuntimeError``) and
 ``GeltipIOError`` (an ``OSError``).
@@ -22,6 +24,7 @@ from ._errors import GeltipError, GeltipIOError, GpuError, InvalidArgumentError
 from ._geltip import (
     BUILD_PROFILE,
     MAX_BATCH,
+    PRIMITIVE_SIZE_MM,
     REGION_CYLINDER,
     REGION_HEMISPHERE,
     REGION_NONE,
@@ -57,6 +60,7 @@ __all__ = [
     "GpuError",
     "InvalidArgumentError",
     "MAX_BATCH",
+    "PRIMITIVE_SIZE_MM",
     "REGION_CYLINDER",
     "REGION_HEMISPHERE",
     "REGION_NAMES",

@@ -22,6 +22,8 @@ __version__: str
 BUILD_PROFILE: str
 #: Contacts per GPU submission in `Simulator.render_batch`.
 MAX_BATCH: int
+#: The smallest and largest size (mm) of a sized primitive ("box:x=10,y=6,z=4").
+PRIMITIVE_SIZE_MM: Tuple[float, float]
 REGION_NONE: int
 REGION_HEMISPHERE: int
 REGION_CYLINDER: int

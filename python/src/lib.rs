@@ -41,6 +41,13 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(host::keep_freed_memory, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_speed, m)?)?;
     m.add("MAX_BATCH", MAX_BATCH)?;
+    m.add(
+        "PRIMITIVE_SIZE_MM",
+        (
+            geltip::object::primitive::MIN_PRIMITIVE_MM,
+            geltip::object::primitive::MAX_PRIMITIVE_MM,
+        ),
+    )?;
     m.add("REGION_NONE", REGION_NONE)?;
     m.add("REGION_HEMISPHERE", REGION_HEMISPHERE)?;
     m.add("REGION_CYLINDER", REGION_CYLINDER)?;

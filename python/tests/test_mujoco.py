@@ -275,12 +275,15 @@ def test_the_mjcf_finger_has_the_sensors_size():
 def test_geoms_geltip_cannot_model_are_skipped_with_a_warning(sim):
     xml = model_xml(
         extra='<geom name="floor" type="plane" size="1 1 0.1" pos="0 0 -1"/>'
-        '<geom name="terrain" type="hfield" hfield="hf" pos="0 0 -2"/>',
+        '<geom name="terrain" type="hfield" hfield="hf" pos="0 0 -2"/>'
+        '<geom name="slab" type="box" size="6 6 0.1" pos="0 0 -3"/>',
         assets='<hfield name="hf" nrow="4" ncol="4" size="1 1 0.1 0.1"/>',
     )
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
-    with pytest.warns(UserWarning, match=r"'floor' \(plane\), 'terrain' \(height field\)"):
+    says = (r"skipping geoms geltip cannot model: 'floor' \(plane\), 'terrain' \(height "
+            r"field\), 'slab' \(box box:x=12000,y=12000,z=200: sizes from 0.001 to 10000 mm\)")
+    with pytest.warns(UserWarning, match=says):
         finger = Finger(model, body="geltip", simulator=sim)
     assert "floor" not in [g.name for g in finger.geoms]
     park(model, data)

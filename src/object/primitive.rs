@@ -270,6 +270,29 @@ impl std::fmt::Display for Primitive {
     }
 }
 
+/// The objects of a comma-separated list (`--objects sphere,box:x=10,y=6,z=4,cone.obj`):
+/// a primitive's own commas stay in it. A piece `key=value` (a lowercase key, no path)
+/// continues the primitive before it.
+pub fn split_objects(list: &str) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for piece in list.split(',') {
+        let continues = out.last().is_some_and(|last| {
+            let kind = last.split_once(':').map(|(k, _)| k.trim());
+            let key = piece.split_once('=').map(|(k, _)| k.trim());
+            kind.is_some_and(|k| Primitive::NAMES.contains(&k))
+                && key.is_some_and(|k| !k.is_empty() && k.chars().all(|c| c.is_ascii_lowercase()))
+        });
+        match out.last_mut() {
+            Some(last) if continues => {
+                last.push(',');
+                last.push_str(piece);
+            }
+            _ => out.push(piece.to_string()),
+        }
+    }
+    out
+}
+
 /// Exact signed distance from `c` (relative to the centre) to the ellipsoid of semi-axes
 /// `e`: the distance to the closest point on its surface (Eberly's robust bisection for
 /// the closest point, "Distance from a Point to an Ellipse, an Ellipsoid, or a

@@ -132,6 +132,12 @@ def resolve(
         name = geom_name(model, g)
         if kind in (SPHERE, CAPSULE, CYLINDER, BOX, ELLIPSOID):
             text, top = primitive(kind, model.geom_size[g])
+            low, high = _geltip.PRIMITIVE_SIZE_MM
+            sizes = [float(v.split("=")[1]) for v in text.split(":")[1].split(",")]
+            if not all(low <= v <= high for v in sizes):
+                why = f"sizes from {low:g} to {high:g} mm"
+                skipped.append(f"'{name}' ({TYPE_NAMES[kind]} {text}: {why})")
+                continue
         elif kind == MESH:
             mesh = int(model.geom_dataid[g])
             text = mesh_object_name(model, mesh)

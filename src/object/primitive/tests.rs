@@ -316,3 +316,19 @@ fn gpu_sizes_follow_the_shader_layout() {
         [4.0, 3.0, 2.0, 0.0]
     );
 }
+
+#[test]
+fn object_lists_keep_a_primitives_commas() {
+    assert_eq!(
+        split_objects("sphere,box:x=10,y=6,z=4,cone,capsule:r=2,l=8,m/a=b.obj"),
+        [
+            "sphere",
+            "box:x=10,y=6,z=4",
+            "cone",
+            "capsule:r=2,l=8",
+            "m/a=b.obj"
+        ]
+    );
+    assert_eq!(split_objects("cone"), ["cone"]);
+    assert_eq!(split_objects("x=1,sphere:r=2"), ["x=1", "sphere:r=2"]);
+}
