@@ -87,32 +87,33 @@ impl Preparer {
 
     /// Prepares frames of several contacts each for one submission, a frame each, leaving
     /// out the rigid poses that do not touch the finger ([`Press::pose_if_touching`]): the
-    /// batch, and for each frame the indices (in its list) of the contacts kept. Frames are
-    /// prepared side by side on rayon's threads; an error names the contact in its frame
-    /// (`contacts[1].pose: ...`).
+    /// batch, and for each frame the indices (in its list) of the contacts kept. Every
+    /// contact of every frame is prepared side by side on rayon's threads; an error names
+    /// the contact in its frame (`contacts[1].pose: ...`).
     pub fn prepare_touching(
         &self,
         frames: &[Vec<Press>],
     ) -> Result<(PreparedBatch, Vec<Vec<usize>>)> {
-        let prepared = frames
+        let contacts: Vec<(usize, usize, &Press)> = frames
+            .iter()
+            .enumerate()
+            .flat_map(|(f, presses)| presses.iter().enumerate().map(move |(k, p)| (f, k, p)))
+            .collect();
+        let prepared = contacts
             .par_iter()
-            .map(|presses| {
-                let mut kept = Vec::with_capacity(presses.len());
-                for (k, press) in presses.iter().enumerate() {
-                    let pose = press
-                        .pose_if_touching(&self.sensor)
-                        .map_err(|e| naming_contact(e, k))?;
-                    if let Some(pose) = pose {
-                        kept.push((k, prepare_posed(&self.sensor, &self.grid, press, pose)));
-                    }
-                }
-                Ok(kept)
+            .map(|&(f, k, press)| {
+                let pose = press
+                    .pose_if_touching(&self.sensor)
+                    .map_err(|e| naming_contact(e, k))?;
+                Ok(pose.map(|pose| (f, k, prepare_posed(&self.sensor, &self.grid, press, pose))))
             })
             .collect::<Result<Vec<_>>>()?;
-        let (batch, kept) = prepared
-            .into_iter()
-            .map(|frame| frame.into_iter().map(|(k, p)| (p, k)).unzip())
-            .unzip();
+        let mut batch: Vec<Vec<Prepared>> = frames.iter().map(|_| Vec::new()).collect();
+        let mut kept: Vec<Vec<usize>> = frames.iter().map(|_| Vec::new()).collect();
+        for (f, k, p) in prepared.into_iter().flatten() {
+            batch[f].push(p);
+            kept[f].push(k);
+        }
         Ok((PreparedBatch(batch), kept))
     }
 
