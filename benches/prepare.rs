@@ -1,11 +1,11 @@
 //! `cargo bench --bench prepare`: the CPU's share of a contact frame, before the GPU runs:
 //! the pose (first-touch search) and the footprint scan, per contact, for the paper's 56
-//! taps and for random dataset contacts (`geltip dataset`'s draws, seed 1) per object. A
+//! taps (held at their places, and as rigid poses with approaches) and for random dataset contacts (`geltip dataset`'s draws, seed 1) per object. A
 //! bench binary printing a table, not a timed test.
 
 use geltip::jobs::{dataset, experiment};
 use geltip::object::{Object, Solid};
-use geltip::render::{contact, elastomer, HeightfieldGrid, Press};
+use geltip::render::{contact, elastomer, HeightfieldGrid, Hold, Press};
 use geltip::sensor::Sensor;
 use std::sync::Arc;
 use std::time::Instant;
@@ -36,6 +36,27 @@ fn main() -> anyhow::Result<()> {
     let taps = experiment::all_taps(&Default::default());
     let (p, f) = time(&sensor, &taps)?;
     println!("| the paper's taps | {} | {p:.3} | {f:.3} |", taps.len());
+    // The same taps as rigid poses pressing along the normal (as geltip.mujoco holds a
+    // physics engine's geoms): their first touch is searched along the whole approach.
+    let posed = taps
+        .iter()
+        .map(|t| {
+            let pose = t.pose(&sensor)?;
+            Ok(Press {
+                object: t.object.clone(),
+                hold: Hold::Pose {
+                    world_from_object: pose.world_from_object,
+                    origin: pose.origin,
+                    approach: Some(-pose.normal),
+                },
+            })
+        })
+        .collect::<geltip::Result<Vec<_>>>()?;
+    let (p, f) = time(&sensor, &posed)?;
+    println!(
+        "| the paper's taps as rigid poses with approaches | {} | {p:.3} | {f:.3} |",
+        posed.len()
+    );
     let depths = dataset::default_depth_range(sensor.finger.shell_thickness);
     for solid in Solid::ALL {
         let objects = vec![Arc::new(Object::Solid(solid))];

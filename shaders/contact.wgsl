@@ -46,6 +46,9 @@ fn object_sdf(p: vec3<f32>) -> f32 {
     if OBJECT_KIND == GRID_OBJECT {
         return grid_sdf(p);
     }
+    if OBJECT_KIND >= OBJ_PRIMITIVE_SPHERE {
+        return primitive_sdf(OBJECT_KIND, frame.object_size, p);
+    }
     return solid_sdf(OBJECT_KIND, p);
 }
 

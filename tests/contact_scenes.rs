@@ -97,6 +97,7 @@ fn matrix_pose_equals_at_spin_tilt() {
     let Hold::Pose {
         world_from_object,
         origin,
+        ..
     } = Hold::from_pose(&[c.x, c.y, c.z, q.w, q.x, q.y, q.z]).unwrap()
     else {
         panic!("not a pose")
@@ -149,6 +150,7 @@ fn untouchable_and_invisible_contacts_say_so() {
         hold: Hold::Pose {
             world_from_object: glam::DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0)),
             origin: sensor.finger.tip() + DVec3::new(0.0, 0.0, 3.0),
+            approach: None,
         },
     };
     let e = above.pose(&sensor).unwrap_err().to_string();
@@ -159,6 +161,7 @@ fn untouchable_and_invisible_contacts_say_so() {
         hold: Hold::Pose {
             world_from_object: glam::DMat3::from_cols(DVec3::Z, DVec3::Y, -DVec3::X),
             origin: DVec3::new(40.0, 0.0, 10.0),
+            approach: None,
         },
     };
     let e = beside.pose(&sensor).unwrap_err().to_string();
@@ -384,6 +387,7 @@ fn presses_through_the_gel_are_refused_and_over_presses_labelled() {
         hold: Hold::Pose {
             world_from_object: glam::DMat3::from_diagonal(DVec3::new(1.0, -1.0, -1.0)),
             origin: sensor.finger.tip() - DVec3::new(0.0, 0.0, 20.0),
+            approach: None,
         },
     };
     let e = inside.pose(&sensor).unwrap_err().to_string();

@@ -80,6 +80,11 @@ fn place_text() {
 }
 
 #[test]
+fn primitive_text() {
+    check("primitive text");
+}
+
+#[test]
 fn resume_dataset_json() {
     check("resume dataset.json");
 }

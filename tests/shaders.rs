@@ -513,6 +513,7 @@ fn uniform_structs_equal_the_shaders() {
         member!(F, image_pitch),
         member!(F, pressed_rect),
         member!(F, meridian_rect),
+        member!(F, object_size),
     ];
     let source = geltip::gpu::shaders::compose("contact").unwrap();
     let module = naga::front::wgsl::parse_str(&source).unwrap();

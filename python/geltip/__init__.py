@@ -11,6 +11,8 @@ float32 in mm, points (N, 3) float64 in mm, pixels (N, 2) float64 (OpenCV conven
     found = geltip.localise(sensor, reference, image)
     mine = geltip.calibrate("empty.png")   # a Sensor fitted to a real GelTip's frame
 
+``geltip.mujoco`` (the ``mujoco`` extra) renders what a finger in a MuJoCo scene feels.
+
 Errors are ``geltip.GeltipError`` subclasses carrying the command line's one-line message:
 ``InvalidArgumentError`` (a ``ValueError``), ``GpuError`` (a ``RuntimeError``) and
 ``GeltipIOError`` (an ``OSError``).
@@ -23,6 +25,7 @@ from ._errors import GeltipError, GeltipIOError, GpuError, InvalidArgumentError
 from ._geltip import (
     BUILD_PROFILE,
     MAX_BATCH,
+    PRIMITIVE_SIZE_MM,
     REGION_CYLINDER,
     REGION_HEMISPHERE,
     REGION_NONE,
@@ -34,6 +37,7 @@ from ._geltip import (
     keep_freed_memory,
     load_image,
     localise,
+    save_image,
 )
 from .dataset import Dataset
 from .evaluate import EvaluationReport, evaluate
@@ -58,6 +62,7 @@ __all__ = [
     "GpuError",
     "InvalidArgumentError",
     "MAX_BATCH",
+    "PRIMITIVE_SIZE_MM",
     "REGION_CYLINDER",
     "REGION_HEMISPHERE",
     "REGION_NAMES",
@@ -72,4 +77,5 @@ __all__ = [
     "load_image",
     "localise",
     "region_names",
+    "save_image",
 ]

@@ -22,6 +22,8 @@ __version__: str
 BUILD_PROFILE: str
 #: Contacts per GPU submission in `Simulator.render_batch`.
 MAX_BATCH: int
+#: The smallest and largest size (mm) of a sized primitive ("box:x=10,y=6,z=4").
+PRIMITIVE_SIZE_MM: Tuple[float, float]
 REGION_NONE: int
 REGION_HEMISPHERE: int
 REGION_CYLINDER: int
@@ -117,12 +119,16 @@ class Simulator:
         tilt_towards: Optional[_Number] = None,
         depth: Optional[_Number] = None,
         pose: Union[str, npt.ArrayLike, None] = None,
+        approach: Union[str, npt.ArrayLike, None] = None,
     ) -> Tuple[_Image, Labels, _Depth]:
         """One contact -> (image (H, W, 3) uint8, labels, depth map (H, W) float32 mm): the
         bytes `geltip render` writes for the same flags. Place: exactly one of `at`,
         `rotation` (deg about the tip), `translation` (mm below the junction), `s` (mm of
         arc from the tip); or `pose` (16 numbers: a row-major 4x4 matrix, or 7: x y z qw qx
-        qy qz) instead of a place and depth."""
+        qy qz) instead of a place and depth, with `approach` (3 numbers, camera frame) the
+        direction its depth is measured along (default: the object's +z). `object` is a
+        built-in solid, a sized primitive ("box:x=10,y=6,z=4"), a mesh file or a name given
+        to `add_mesh`."""
     def render_scene(
         self, contacts: Sequence[Mapping[str, Any]]
     ) -> Tuple[_Image, Labels, _Depth]:
@@ -141,6 +147,27 @@ class Simulator:
         depth_maps=False). Every contact is checked before any renders; an error names it
         (`contacts[1].depth: ...`). Frames are written straight into the arrays; pass
         `out`/`depth_out` (C-contiguous, of those shapes) to reuse your own."""
+    def render_scenes(
+        self,
+        scenes: Sequence[Sequence[Mapping[str, Any]]],
+        *,
+        skip_untouching: bool = False,
+        depth_maps: bool = False,
+        out: Optional[npt.NDArray[np.uint8]] = None,
+        depth_out: Optional[npt.NDArray[np.float32]] = None,
+    ) -> Tuple[npt.NDArray[np.uint8], List[Labels], Optional[npt.NDArray[np.float32]]]:
+        """Many scenes (lists of contact dicts, as `render_scene` takes), batched on the GPU
+        -> (images (N, H, W, 3) uint8, [labels as `render_scene`'s], depth maps or None).
+        With `skip_untouching`, a posed object that does not touch the finger is left out of
+        its frame (its index listed in the labels' "untouched") instead of raising; a frame
+        with none touching is the empty finger. An error names the scene: `scenes[3]: ...`."""
+    def add_mesh(
+        self, name: str, vertices: npt.ArrayLike, faces: npt.ArrayLike
+    ) -> npt.NDArray[np.float64]:
+        """Makes the mesh of `vertices` ((N, 3), mm) and `faces` ((M, 3) indices, outward
+        counter-clockwise) the object `name` for this Simulator, placed and baked as the
+        same vertices in an OBJ file are. Returns the point of the mesh (3,) that became the
+        object's origin (its top). `name` may not be a built-in solid's or a primitive's."""
 
 def localise(
     sensor: Sensor, reference: _Image, image: _Image, method: str = "surface"
@@ -150,6 +177,10 @@ def localise(
 
 def load_image(path: _Path) -> _Image:
     """Reads an image file (PNG) as (H, W, 3) uint8."""
+
+def save_image(path: _Path, image: _Image) -> None:
+    """Writes an (H, W, 3) uint8 array as a PNG file, atomically (a temporary name, then
+    renamed), with the encoder `geltip dataset` uses."""
 
 def host_speed() -> Dict[str, float]:
     """How fast the host's cores run now: {"one_core_ms", "all_cores_ms"}, a fixed scalar

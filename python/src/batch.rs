@@ -1,12 +1,13 @@
 //! `Simulator.render_batch`: many contacts rendered on the Simulator's render streams, each
-//! frame written straight into the NumPy arrays returned.
+//! frame written straight into the NumPy arrays returned (the output arrays and the
+//! submissions are shared with `render_scenes`).
 
 use crate::convert::{json_to_py, output_array, rgba_to_rgb};
 use crate::errors::{bad, detached};
 use crate::simulator::Simulator;
 use geltip::render::gpu::{Renderer, MAX_BATCH};
 use geltip::render::pool::RenderPool;
-use geltip::render::{GroundTruth, Press};
+use geltip::render::Frame;
 use geltip::scene::ContactSpec;
 use numpy::{Ix3, Ix4, PyArray, PyArrayMethods};
 use pyo3::prelude::*;
@@ -46,19 +47,20 @@ impl<'py> Outputs<'py> {
     }
 }
 
-/// Renders `specs` into `outputs`: `(images, [labels], depth maps or None)`.
-pub fn render<'py>(
-    py: Python<'py>,
-    sim: &Simulator,
-    specs: &[ContactSpec],
-    outputs: Outputs<'py>,
-) -> PyResult<Bound<'py, PyTuple>> {
-    let truths = {
-        let mut images = outputs
+impl<'py> Outputs<'py> {
+    /// Runs `render` with the GIL released on the arrays' pixels: the images' (RGB), and
+    /// the depth maps' when there are any.
+    pub fn fill<T: Send>(
+        &self,
+        py: Python<'py>,
+        what: &str,
+        render: impl FnOnce(&mut [u8], Option<&mut [f32]>) -> geltip::Result<T> + Send,
+    ) -> PyResult<T> {
+        let mut images = self
             .images
             .try_readwrite()
             .map_err(|e| bad("out", e.to_string()))?;
-        let mut depths = match &outputs.depths {
+        let mut depths = match &self.depths {
             Some(d) => Some(
                 d.try_readwrite()
                     .map_err(|e| bad("depth_out", e.to_string()))?,
@@ -75,62 +77,98 @@ pub fn render<'py>(
             ),
             None => None,
         };
-        detached(py, "rendering a batch", || {
-            // Every press is checked before any is rendered, so that an error names its index.
-            let presses = sim.presses(specs, false)?;
-            render_into(
-                &mut *sim.pool()?,
-                &presses,
-                image_px,
-                depth_px,
-                outputs.size,
-            )
-        })?
-    };
+        detached(py, what, || render(image_px, depth_px))
+    }
+
+    /// `(images, labels, depth maps or None)`.
+    pub fn with_labels(
+        self,
+        py: Python<'py>,
+        labels: Bound<'py, PyList>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let depths = match self.depths {
+            Some(d) => d.into_any(),
+            None => py.None().into_bound(py),
+        };
+        PyTuple::new(py, [self.images.into_any(), labels.into_any(), depths])
+    }
+
+    /// The frames' height and width.
+    pub fn size(&self) -> (usize, usize) {
+        self.size
+    }
+}
+
+/// Copies `frame` into slot `k` of `images` (RGB) and of `depths`.
+pub fn copy_frame(frame: &Frame, k: usize, images: &mut [u8], depths: Option<&mut [f32]>) {
+    let (rgb, px) = (frame.rgba.len() / 4 * 3, frame.indentation.len());
+    rgba_to_rgb(&frame.rgba, &mut images[k * rgb..(k + 1) * rgb]);
+    if let Some(d) = depths {
+        d[k * px..(k + 1) * px].copy_from_slice(&frame.indentation);
+    }
+}
+
+/// Renders `specs` into `outputs`: `(images, [labels], depth maps or None)`.
+pub fn render<'py>(
+    py: Python<'py>,
+    sim: &Simulator,
+    specs: &[ContactSpec],
+    outputs: Outputs<'py>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let size = outputs.size();
+    let truths = outputs.fill(py, "rendering a batch", |images, depths| {
+        // Every press is checked before any is rendered, so that an error names its index.
+        let presses = sim.presses(specs, false)?;
+        render_into(
+            &mut *sim.pool()?,
+            &presses,
+            images,
+            depths,
+            size,
+            |r, _, p| r.render_batch(p),
+        )
+    })?;
     let labels = PyList::empty(py);
     for t in &truths {
         labels.append(json_to_py(py, &t.to_json())?)?;
     }
-    let depths = match outputs.depths {
-        Some(d) => d.into_any(),
-        None => py.None().into_bound(py),
-    };
-    PyTuple::new(py, [outputs.images.into_any(), labels.into_any(), depths])
+    outputs.with_labels(py, labels)
 }
 
-/// Renders `presses` in submissions of [`MAX_BATCH`] on the pool's streams (submission c on
-/// stream c mod n, so the same calls give the same frames), writing frame i into slot i of
-/// `images` (RGB) and `depths`; the labels in list order.
-fn render_into(
+/// Renders `jobs` (a frame each) in submissions of [`MAX_BATCH`] on the pool's streams
+/// (submission c on stream c mod n, so the same calls give the same frames) with `work`,
+/// writing frame i into slot i of `images` (RGB) and `depths`; what `work` gives with each
+/// frame comes back in list order. `work` gets the index of its submission's first job.
+pub fn render_into<J: Sync, T: Send>(
     pool: &mut RenderPool,
-    presses: &[Press],
+    jobs: &[J],
     images: &mut [u8],
     depths: Option<&mut [f32]>,
     (h, w): (usize, usize),
-) -> geltip::Result<Vec<GroundTruth>> {
+    work: impl Fn(&mut Renderer, usize, &[J]) -> geltip::Result<Vec<(Frame, T)>> + Sync,
+) -> geltip::Result<Vec<T>> {
     let (frame_rgb, frame_px) = (h * w * 3, h * w);
     let mut depth_parts: Vec<Option<&mut [f32]>> = match depths {
         Some(d) => d.chunks_mut(MAX_BATCH * frame_px).map(Some).collect(),
         None => Vec::new(),
     };
-    depth_parts.resize_with(presses.len().div_ceil(MAX_BATCH), || None);
-    let submissions = presses
+    depth_parts.resize_with(jobs.len().div_ceil(MAX_BATCH), || None);
+    let submissions = jobs
         .chunks(MAX_BATCH)
+        .enumerate()
         .zip(images.chunks_mut(MAX_BATCH * frame_rgb))
         .zip(depth_parts);
-    let labelled = pool.map(
+    let done = pool.map(
         submissions,
-        |r: &mut Renderer, ((presses, image), mut depth)| {
-            let mut truths = Vec::with_capacity(presses.len());
-            for (k, (frame, truth)) in r.render_batch(presses)?.into_iter().enumerate() {
-                rgba_to_rgb(&frame.rgba, &mut image[k * frame_rgb..(k + 1) * frame_rgb]);
-                if let Some(d) = depth.as_deref_mut() {
-                    d[k * frame_px..(k + 1) * frame_px].copy_from_slice(&frame.indentation);
-                }
-                truths.push(truth);
+        |r: &mut Renderer, (((c, jobs), image), mut depth)| {
+            let frames = work(r, c * MAX_BATCH, jobs)?;
+            let mut out = Vec::with_capacity(frames.len());
+            for (k, (frame, t)) in frames.into_iter().enumerate() {
+                copy_frame(&frame, k, image, depth.as_deref_mut());
+                out.push(t);
             }
-            Ok(truths)
+            Ok(out)
         },
     )?;
-    Ok(labelled.into_iter().flatten().collect())
+    Ok(done.into_iter().flatten().collect())
 }

@@ -4,7 +4,7 @@
 
 use crate::convert::{number, path_or_str, repr};
 use crate::errors::{bad, lib};
-use geltip::scene::{naming_contact, pose_numbers, At, ContactSpec};
+use geltip::scene::{naming_contact, numbers, At, ContactSpec};
 use numpy::{AllowTypeChange, PyArrayLikeDyn};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 /// The keys a contact accepts (keyword arguments of `render`, keys of the dicts of
 /// `render_batch` and `render_scene`): the spec's fields, and `rotation`, `translation` and
 /// `s` as shorthands for `at`.
-pub const CONTACT_KEYS: [&str; 11] = [
+pub const CONTACT_KEYS: [&str; 12] = [
     "object",
     "at",
     "rotation",
@@ -25,6 +25,7 @@ pub const CONTACT_KEYS: [&str; 11] = [
     "tilt_towards",
     "depth",
     "pose",
+    "approach",
 ];
 
 /// The places, in the order `at` and its shorthands are named in messages.
@@ -39,7 +40,7 @@ pub struct ContactArgs<'py> {
 
 impl<'py> ContactArgs<'py> {
     /// `render`'s keyword arguments, in the order of [`CONTACT_KEYS`].
-    pub fn from_kwargs(values: [Option<&Bound<'py, PyAny>>; 11]) -> ContactArgs<'py> {
+    pub fn from_kwargs(values: [Option<&Bound<'py, PyAny>>; 12]) -> ContactArgs<'py> {
         let given = CONTACT_KEYS
             .into_iter()
             .zip(values)
@@ -107,7 +108,14 @@ impl<'py> ContactArgs<'py> {
             tilt: num("tilt")?,
             tilt_towards: num("tilt_towards")?,
             depth: num("depth")?,
-            pose: self.get("pose").map(|p| self.pose(p)).transpose()?,
+            pose: self
+                .get("pose")
+                .map(|p| self.numbers("pose", p))
+                .transpose()?,
+            approach: self
+                .get("approach")
+                .map(|a| self.numbers("approach", a))
+                .transpose()?,
         })
     }
 
@@ -168,26 +176,27 @@ impl<'py> ContactArgs<'py> {
         Ok(At::Table(table))
     }
 
-    /// `pose` as text (the numbers separated by commas or spaces, as `--pose`) or any
-    /// array-like of numbers.
-    fn pose(&self, pose: &Bound<'py, PyAny>) -> PyResult<Vec<f64>> {
-        if let Ok(text) = pose.extract::<String>() {
-            return lib(pose_numbers(&text).map_err(|e| match self.index {
+    /// `pose` or `approach` as text (the numbers separated by commas or spaces, as `--pose`)
+    /// or any array-like of numbers.
+    fn numbers(&self, key: &str, value: &Bound<'py, PyAny>) -> PyResult<Vec<f64>> {
+        if let Ok(text) = value.extract::<String>() {
+            return lib(numbers(key, &text).map_err(|e| match self.index {
                 Some(k) => naming_contact(e, k),
                 None => e,
             }));
         }
-        let numbers = pose.call_method0("__iter__").and_then(|_| {
-            let array: PyArrayLikeDyn<'_, f64, AllowTypeChange> = pose.extract()?;
+        let values = value.call_method0("__iter__").and_then(|_| {
+            let array: PyArrayLikeDyn<'_, f64, AllowTypeChange> = value.extract()?;
             Ok(array.as_array().iter().copied().collect())
         });
-        numbers.map_err(|_| {
+        let expected = match key {
+            "pose" => "16 numbers (a 4x4 matrix) or 7 (x y z qw qx qy qz)",
+            _ => "3 numbers (a direction in the camera frame)",
+        };
+        values.map_err(|_| {
             bad(
-                self.field("pose"),
-                format!(
-                    "expected 16 numbers (a 4x4 matrix) or 7 (x y z qw qx qy qz), got {}",
-                    repr(pose)
-                ),
+                self.field(key),
+                format!("expected {expected}, got {}", repr(value)),
             )
         })
     }

@@ -9,8 +9,9 @@
 //! - `errors`: library errors as Python exceptions, the GIL released around library calls.
 //! - `convert`: JSON, images, depth maps, points and pixels, numbers and paths.
 //! - `contact`: a contact's keyword arguments or dict as the library's `ContactSpec`.
-//! - `sensor`: `Sensor`. `simulator`: `Simulator`; `batch`: its `render_batch`.
-//! - `localise`: `localise`, `load_image`. `host`: `keep_freed_memory`, `host_speed`.
+//! - `sensor`: `Sensor`. `simulator`: `Simulator`; `batch`: its `render_batch`; `scenes`:
+//!   its `render_scenes`; `mesh`: its `add_mesh`'s arrays.
+//! - `localise`: `localise`, `load_image`, `save_image`. `host`: `keep_freed_memory`, `host_speed`.
 //! - `evaluate`: `evaluate`, a detector (a function or a built-in) scored on a set or suite.
 //! - `calibrate`: `calibrate`, a sensor fitted to a real sensor's empty frames.
 
@@ -22,6 +23,8 @@ mod errors;
 mod evaluate;
 mod host;
 mod localise;
+mod mesh;
+mod scenes;
 mod sensor;
 mod simulator;
 
@@ -37,9 +40,17 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(localise::load_image, m)?)?;
+    m.add_function(wrap_pyfunction!(localise::save_image, m)?)?;
     m.add_function(wrap_pyfunction!(host::keep_freed_memory, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_speed, m)?)?;
     m.add("MAX_BATCH", MAX_BATCH)?;
+    m.add(
+        "PRIMITIVE_SIZE_MM",
+        (
+            geltip::object::primitive::MIN_PRIMITIVE_MM,
+            geltip::object::primitive::MAX_PRIMITIVE_MM,
+        ),
+    )?;
     m.add("REGION_NONE", REGION_NONE)?;
     m.add("REGION_HEMISPHERE", REGION_HEMISPHERE)?;
     m.add("REGION_CYLINDER", REGION_CYLINDER)?;

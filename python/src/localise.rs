@@ -1,4 +1,5 @@
-//! `geltip.localise` and `geltip.load_image`: finding a contact in a frame, reading frames.
+//! `geltip.localise`, `geltip.load_image` and `geltip.save_image`: finding a contact in a
+//! frame, reading and writing frames.
 
 use crate::convert::{json_to_py, path_or_str, rgb_image};
 use crate::errors::{detached, lib};
@@ -41,4 +42,24 @@ pub fn load_image<'py>(
     })?;
     let (w, h) = img.dimensions();
     PyArray::from_vec(py, img.into_raw()).reshape([h as usize, w as usize, 3])
+}
+
+/// Writes an (H, W, 3) uint8 array as a PNG file, atomically (to a temporary name in the
+/// same folder, then renamed), with the encoder `geltip dataset` uses.
+#[pyfunction]
+pub fn save_image(
+    py: Python<'_>,
+    path: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    let path = path_or_str("path", path)?;
+    let image = rgb_image("image", image)?;
+    detached(py, "writing an image", || {
+        geltip::output::write_png_rgb8(
+            std::path::Path::new(&path),
+            image.width(),
+            image.height(),
+            image.as_raw(),
+        )
+    })
 }

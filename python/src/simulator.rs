@@ -1,11 +1,11 @@
 //! `geltip.Simulator`: the renderer of one sensor (its render streams, the objects it has
 //! loaded), rendering one contact, a scene or a batch.
 
-use crate::batch;
 use crate::contact::{specs_of, ContactArgs};
-use crate::convert::{depth_array, image_array, json_to_py, path_or_str};
+use crate::convert::{array_out, depth_array, image_array, json_to_py, path_or_str};
 use crate::errors::{detached, lib};
 use crate::sensor::Sensor;
+use crate::{batch, mesh, scenes};
 use geltip::object::ObjectCache;
 use geltip::render::gpu::Renderer;
 use geltip::render::pool::RenderPool;
@@ -159,8 +159,9 @@ impl Simulator {
     /// One contact: `(image (H, W, 3) uint8, labels dict, depth_map (H, W) float32 mm)`,
     /// the bytes `geltip render` writes for the same flags. Place it with `at="rotation=30"`
     /// (or `("rotation", 30)`), or `rotation=`, `translation=`, `s=`; or give `pose=` (16 or
-    /// 7 numbers, as `--pose`) instead of a place and depth.
-    #[pyo3(signature = (*, object = None, at = None, rotation = None, translation = None, s = None, azimuth = None, spin = None, tilt = None, tilt_towards = None, depth = None, pose = None))]
+    /// 7 numbers, as `--pose`) instead of a place and depth, and `approach=` (3 numbers) the
+    /// direction its depth is measured along.
+    #[pyo3(signature = (*, object = None, at = None, rotation = None, translation = None, s = None, azimuth = None, spin = None, tilt = None, tilt_towards = None, depth = None, pose = None, approach = None))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
@@ -176,6 +177,7 @@ impl Simulator {
         tilt_towards: Option<&Bound<'py, PyAny>>,
         depth: Option<&Bound<'py, PyAny>>,
         pose: Option<&Bound<'py, PyAny>>,
+        approach: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let spec = ContactArgs::from_kwargs([
             object,
@@ -189,6 +191,7 @@ impl Simulator {
             tilt_towards,
             depth,
             pose,
+            approach,
         ])
         .spec()?;
         let (frame, truths) = detached(py, "rendering a contact", || {
@@ -244,5 +247,50 @@ impl Simulator {
         let outputs =
             batch::Outputs::new(py, self.sensor(), specs.len(), depth_maps, out, depth_out)?;
         batch::render(py, self, &specs, outputs)
+    }
+
+    /// Many scenes (frames of several contacts each, as `render_scene`'s lists), batched on
+    /// the GPU (`MAX_BATCH` frames per submission): `(images (N, H, W, 3) uint8, labels
+    /// [dict], depth_maps (N, H, W) float32 | None)`. With `skip_untouching=True` a posed
+    /// object that does not touch the finger is left out of its frame instead of raising,
+    /// and the frame's labels list it under `"untouched"` (indices into its list); a frame
+    /// with none touching is the empty finger. `out=`/`depth_out=` as `render_batch`.
+    #[pyo3(signature = (scenes, *, skip_untouching = false, depth_maps = false, out = None, depth_out = None))]
+    fn render_scenes<'py>(
+        &self,
+        py: Python<'py>,
+        scenes: &Bound<'py, PyAny>,
+        skip_untouching: bool,
+        depth_maps: bool,
+        out: Option<&Bound<'py, PyAny>>,
+        depth_out: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let frames = scenes::specs_of_scenes(scenes)?;
+        let outputs =
+            batch::Outputs::new(py, self.sensor(), frames.len(), depth_maps, out, depth_out)?;
+        scenes::render(py, self, &frames, skip_untouching, outputs)
+    }
+
+    /// Makes a mesh given as `vertices` ((N, 3) numbers, mm) and `faces` ((M, 3) vertex
+    /// indices, counter-clockwise seen from outside) the object `name` for this Simulator's
+    /// contacts, placed and baked as the same vertices in an OBJ file would be (about 1.5 s
+    /// for 4 000 triangles). Returns the point of the mesh (float64 (3,), mm, in the
+    /// vertices' frame) that became the object's origin, its top: a pose of the object is
+    /// the vertices' frame moved there.
+    fn add_mesh<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+        vertices: &Bound<'py, PyAny>,
+        faces: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let mesh = mesh::mesh_of(vertices, faces)?;
+        let name = name.to_string();
+        let top = detached(py, "baking a mesh", || {
+            let (object, top) = geltip::object::Object::from_mesh(&name, mesh)?;
+            objects(self).insert(&name, object);
+            Ok(top)
+        })?;
+        array_out(py, &[], 3, top.to_array().to_vec())
     }
 }

@@ -72,7 +72,8 @@ struct Frame {
     object_z: vec4<f32>,
     // xyz: the object's origin (its top) in the camera frame; w: deepest trace (mm).
     origin: vec4<f32>,
-    // 0..6: a built-in solid (shaders/shared/object.wgsl); GRID_OBJECT: the baked SDF grid.
+    // 0..8: a built-in solid, 10..14: a sized primitive (shaders/shared/object.wgsl);
+    // GRID_OBJECT: the baked SDF grid.
     object_kind: u32,
     grid_dims_x: u32,
     grid_dims_y: u32,
@@ -89,6 +90,8 @@ struct Frame {
     // Texels the elastomer's meridians pass runs over: those within the kernels' reach of
     // pressed_rect (inside texel_rect).
     meridian_rect: vec4<u32>,
+    // A sized primitive's sizes (object.wgsl primitive_sdf); zero for other objects.
+    object_size: vec4<f32>,
 }
 
 // The sensor's lens model, ray steps, kernel taps, LED count and shading exponents (the

@@ -1,9 +1,11 @@
-// object.wgsl: signed distance functions of the seven built-in test solids.
+// object.wgsl: signed distance functions of the built-in test solids and of the sized
+// primitives.
 //
 // Twin of src/object/solids.rs: every constant OBJ_X here is `dims::X` there, and every
 // obj_* function mirrors the Rust function of the same name (without the prefix). Change
 // both together; tests/objects_wgsl.rs checks that the constants agree and that this file
-// validates with naga.
+// validates with naga. The primitives' twin is src/object/primitive.rs (primitive_sdf,
+// OBJ_PRIMITIVE_*), held to it by tests/primitives.rs.
 //
 // Object frame: the contact top is at the origin, the body lies in z <= 0, the finger comes
 // from +z. Distances in mm, negative inside. Ids: see OBJ_SOLID_* (Solid::id in Rust).
@@ -21,6 +23,18 @@ const OBJ_SOLID_TUBE: u32 = 5u;
 const OBJ_SOLID_SLAB: u32 = 6u;
 const OBJ_SOLID_TORUS: u32 = 7u;
 const OBJ_SOLID_DISC: u32 = 8u;
+
+// Sized primitives (Primitive::kind, from FIRST_PRIMITIVE_KIND): their sizes come in the
+// frame's object_size (Primitive::gpu_size).
+const OBJ_PRIMITIVE_SPHERE: u32 = 10u;
+const OBJ_PRIMITIVE_CAPSULE: u32 = 11u;
+const OBJ_PRIMITIVE_CYLINDER: u32 = 12u;
+const OBJ_PRIMITIVE_BOX: u32 = 13u;
+const OBJ_PRIMITIVE_ELLIPSOID: u32 = 14u;
+
+// Bisection steps at most in the ellipsoid's closest-point root: f32 converges within about
+// 40 from the bracket's width (Rust: ELLIPSOID_MAX_STEPS, for f64).
+const OBJ_ELLIPSOID_MAX_STEPS: u32 = 64u;
 
 // Dimensions (mm). Twin: `pub mod dims` in src/object/solids.rs.
 const OBJ_CONE_RADIUS: f32 = 5.0;
@@ -178,4 +192,170 @@ fn solid_sdf(id: u32, p: vec3<f32>) -> f32 {
         default: {}
     }
     return d;
+}
+
+// Signed distance (mm, negative inside) from p (object frame) to the sized primitive of
+// kind `kind` with sizes `size` (sphere: r; capsule, cylinder: r, l; box, ellipsoid: their
+// half-sizes x, y, z). Its top is at the origin, its centre at (0, 0, -top).
+// Twin: Primitive::sdf in src/object/primitive.rs.
+fn primitive_sdf(kind: u32, size: vec4<f32>, p: vec3<f32>) -> f32 {
+    var d = OBJ_FAR;
+    switch kind {
+        case OBJ_PRIMITIVE_SPHERE: {
+            d = length(p + vec3<f32>(0.0, 0.0, size.x)) - size.x;
+        }
+        case OBJ_PRIMITIVE_CAPSULE: {
+            let c = p + vec3<f32>(0.0, 0.0, size.x + size.y / 2.0);
+            d = length(c - vec3<f32>(0.0, 0.0, clamp(c.z, -size.y / 2.0, size.y / 2.0))) - size.x;
+        }
+        case OBJ_PRIMITIVE_CYLINDER: {
+            let c = p + vec3<f32>(0.0, 0.0, size.y / 2.0);
+            d = obj_sd_box2(vec2<f32>(length(c.xy), c.z), vec2<f32>(0.0), vec2<f32>(size.x, size.y / 2.0));
+        }
+        case OBJ_PRIMITIVE_BOX: {
+            d = obj_sd_box3(p, vec3<f32>(0.0, 0.0, -size.z), size.xyz);
+        }
+        case OBJ_PRIMITIVE_ELLIPSOID: {
+            d = obj_sd_ellipsoid(p + vec3<f32>(0.0, 0.0, size.z), size.xyz);
+        }
+        default: {}
+    }
+    return d;
+}
+
+// Exact signed distance from c (relative to the centre) to the ellipsoid of semi-axes e:
+// the closest point by Eberly's robust bisection, signed by whether c is inside.
+fn obj_sd_ellipsoid(c: vec3<f32>, e: vec3<f32>) -> f32 {
+    // By symmetry, the first octant with the axes sorted longest first.
+    var a0 = vec2<f32>(e.x, abs(c.x));
+    var a1 = vec2<f32>(e.y, abs(c.y));
+    var a2 = vec2<f32>(e.z, abs(c.z));
+    if a0.x < a1.x {
+        let t = a0; a0 = a1; a1 = t;
+    }
+    if a1.x < a2.x {
+        let t = a1; a1 = a2; a2 = t;
+    }
+    if a0.x < a1.x {
+        let t = a0; a0 = a1; a1 = t;
+    }
+    let q = vec3<f32>(a0.y / a0.x, a1.y / a1.x, a2.y / a2.x);
+    let g = dot(q, q) - 1.0;
+    let d = obj_distance_to_ellipsoid(vec3<f32>(a0.x, a1.x, a2.x), vec3<f32>(a0.y, a1.y, a2.y));
+    return select(d, -d, g < 0.0);
+}
+
+// Unsigned distance from y >= 0 to the ellipsoid of semi-axes e.x >= e.y >= e.z.
+fn obj_distance_to_ellipsoid(e: vec3<f32>, y: vec3<f32>) -> f32 {
+    if y.z > 0.0 {
+        if y.y > 0.0 && y.x > 0.0 {
+            let z = y / e;
+            let g = dot(z, z) - 1.0;
+            if g == 0.0 {
+                return 0.0;
+            }
+            let r = vec2<f32>((e.x / e.z) * (e.x / e.z), (e.y / e.z) * (e.y / e.z));
+            let s = obj_ellipsoid_root(r, z, g);
+            let x = vec3<f32>(r.x * y.x / (s + r.x), r.y * y.y / (s + r.y), y.z / (s + 1.0));
+            return length(x - y);
+        }
+        if y.y > 0.0 {
+            return obj_distance_to_ellipse(e.yz, y.yz);
+        }
+        if y.x > 0.0 {
+            return obj_distance_to_ellipse(e.xz, y.xz);
+        }
+        return abs(y.z - e.z);
+    }
+    // On the plane of the two longest axes: inside the region whose closest point lies off
+    // that plane, or else the ellipse's problem.
+    let den = vec2<f32>(e.x * e.x - e.z * e.z, e.y * e.y - e.z * e.z);
+    let num = vec2<f32>(e.x * y.x, e.y * y.y);
+    if num.x < den.x && num.y < den.y {
+        let q = num / den;
+        let discr = 1.0 - dot(q, q);
+        if discr > 0.0 {
+            let x = vec3<f32>(e.x * q.x, e.y * q.y, e.z * sqrt(discr));
+            return length(x - vec3<f32>(y.x, y.y, 0.0));
+        }
+    }
+    return obj_distance_to_ellipse(e.xy, y.xy);
+}
+
+// Unsigned distance from y >= 0 to the ellipse of semi-axes e.x >= e.y.
+fn obj_distance_to_ellipse(e: vec2<f32>, y: vec2<f32>) -> f32 {
+    if y.y > 0.0 {
+        if y.x > 0.0 {
+            let z = y / e;
+            let g = dot(z, z) - 1.0;
+            if g == 0.0 {
+                return 0.0;
+            }
+            let r0 = (e.x / e.y) * (e.x / e.y);
+            let s = obj_ellipse_root(r0, z, g);
+            let x = vec2<f32>(r0 * y.x / (s + r0), y.y / (s + 1.0));
+            return length(x - y);
+        }
+        return abs(y.y - e.y);
+    }
+    let num = e.x * y.x;
+    let den = e.x * e.x - e.y * e.y;
+    if num < den {
+        let q = num / den;
+        let x = vec2<f32>(e.x * q, e.y * sqrt(1.0 - q * q));
+        return length(x - vec2<f32>(y.x, 0.0));
+    }
+    return abs(y.x - e.x);
+}
+
+// The root s of sum((r_i z_i / (s + r_i))^2) - 1 (r = 1 for the last axis) by bisection of
+// its bracket; g is its value at s = 0.
+fn obj_ellipsoid_root(r: vec2<f32>, z: vec3<f32>, g: f32) -> f32 {
+    let n = r * z.xy;
+    var lo = z.z - 1.0;
+    var hi = select(length(vec3<f32>(n, z.z)) - 1.0, 0.0, g < 0.0);
+    var s = 0.5 * (lo + hi);
+    for (var i = 0u; i < OBJ_ELLIPSOID_MAX_STEPS; i++) {
+        s = 0.5 * (lo + hi);
+        if s == lo || s == hi {
+            break;
+        }
+        let a = n.x / (s + r.x);
+        let b = n.y / (s + r.y);
+        let c = z.z / (s + 1.0);
+        let f = a * a + b * b + c * c - 1.0;
+        if f > 0.0 {
+            lo = s;
+        } else if f < 0.0 {
+            hi = s;
+        } else {
+            break;
+        }
+    }
+    return s;
+}
+
+// As obj_ellipsoid_root, for an ellipse.
+fn obj_ellipse_root(r0: f32, z: vec2<f32>, g: f32) -> f32 {
+    let n0 = r0 * z.x;
+    var lo = z.y - 1.0;
+    var hi = select(length(vec2<f32>(n0, z.y)) - 1.0, 0.0, g < 0.0);
+    var s = 0.5 * (lo + hi);
+    for (var i = 0u; i < OBJ_ELLIPSOID_MAX_STEPS; i++) {
+        s = 0.5 * (lo + hi);
+        if s == lo || s == hi {
+            break;
+        }
+        let a = n0 / (s + r0);
+        let c = z.y / (s + 1.0);
+        let f = a * a + c * c - 1.0;
+        if f > 0.0 {
+            lo = s;
+        } else if f < 0.0 {
+            hi = s;
+        } else {
+            break;
+        }
+    }
+    return s;
 }

@@ -21,8 +21,9 @@ pub struct DatasetArgs {
     /// Directory of the set (or of this shard).
     #[arg(long, required_unless_present = "merge", conflicts_with = "merge")]
     out: Option<PathBuf>,
-    /// Comma-separated built-in solids and/or mesh files (default: the seven solids).
-    #[arg(long, value_delimiter = ',')]
+    /// Comma-separated built-in solids, sized primitives (box:x=10,y=6,z=4 keeps its
+    /// commas) and/or mesh files (default: the seven solids).
+    #[arg(long)]
     objects: Vec<String>,
     /// Press depths, mm, as min..max (default: 0.2 to the gel's thickness).
     #[arg(long = "depth-range")]
@@ -105,7 +106,11 @@ impl DatasetArgs {
         let sensor = Sensor::load(&sensor_arg)?;
         let mut spec = dataset::Spec::new(&sensor_arg, sensor, count, self.seed);
         if !self.objects.is_empty() {
-            spec.objects = self.objects;
+            spec.objects = self
+                .objects
+                .iter()
+                .flat_map(|list| geltip::object::primitive::split_objects(list))
+                .collect();
         }
         if let Some(r) = self.depth_range {
             spec.depth_range = dataset::parse_depth_range(&r)?;

@@ -8,7 +8,7 @@ use geltip::output;
 use geltip::render::background::{composite, load_background, Background};
 use geltip::render::gpu::Renderer;
 use geltip::render::{Frame, Press};
-use geltip::scene::{load_scene, pose_numbers, At, ContactSpec};
+use geltip::scene::{load_scene, numbers, pose_numbers, At, ContactSpec};
 use geltip::sensor::Sensor;
 use geltip::GeltipError;
 use serde_json::json;
@@ -22,8 +22,10 @@ pub struct RenderArgs {
     /// Render the empty finger (the reference frame detectors subtract).
     #[arg(long, conflicts_with_all = ["object", "at", "depth", "azimuth", "spin", "labels", "pose", "scene", "tilt", "tilt_towards"])]
     reference: bool,
-    /// A built-in solid (cone, sphere, irregular-prism, cylinder, edge, tube, slab) or a
-    /// mesh file (.obj, .gltf, .glb) whose +z points at the finger.
+    /// A built-in solid (cone, sphere, irregular-prism, cylinder, edge, tube, slab, torus,
+    /// disc), a sized primitive (sphere:r=5, capsule:r=2,l=8, cylinder:r=2,l=10,
+    /// box:x=10,y=6,z=4, ellipsoid:x=8,y=6,z=4; mm, top at the contact, axis along the
+    /// normal) or a mesh file (.obj, .gltf, .glb) whose +z points at the finger.
     #[arg(long, required_unless_present_any = ["reference", "scene"], conflicts_with = "scene")]
     object: Option<String>,
     /// Where: rotation=<deg> about the tip (0 = tip, 90 = junction), translation=<mm>
@@ -50,8 +52,13 @@ pub struct RenderArgs {
     /// A rigid pose in the camera frame instead of --at/--depth: 16 numbers (row-major
     /// 4x4 matrix) or 7 (x y z qw qx qy qz), comma- or space-separated; the depth is
     /// what the pose implies (in the labels). The labels' `pose` loads back as is.
-    #[arg(long, conflicts_with_all = ["azimuth", "spin", "tilt", "tilt_towards", "scene"])]
+    #[arg(long, allow_hyphen_values = true, conflicts_with_all = ["azimuth", "spin", "tilt", "tilt_towards", "scene"])]
     pose: Option<String>,
+    /// With --pose: the direction the object moves in to press the finger, 3 numbers in the
+    /// camera frame (comma- or space-separated); the depth is measured along it. Default:
+    /// the object's own +z axis.
+    #[arg(long, requires = "pose", allow_hyphen_values = true)]
+    approach: Option<String>,
     /// Several contacts in one frame: a JSON (.json) or TOML file listing `contacts`,
     /// each with the flags' names (object, at, depth, azimuth, spin, tilt, tilt_towards)
     /// or object and pose. The labels become a list plus the union mask.
@@ -122,9 +129,14 @@ impl RenderArgs {
     fn spec(&self) -> Result<ContactSpec> {
         let object = self.object.clone().context("--object is required")?;
         if let Some(text) = &self.pose {
+            let approach = match &self.approach {
+                Some(text) => Some(numbers("approach", text).map_err(under_flag)?),
+                None => None,
+            };
             return Ok(ContactSpec {
                 object,
                 pose: Some(pose_numbers(text).map_err(under_flag)?),
+                approach,
                 ..ContactSpec::default()
             });
         }
@@ -137,6 +149,7 @@ impl RenderArgs {
             tilt_towards: Some(self.tilt_towards),
             depth: Some(self.depth.context("--depth is required")?),
             pose: None,
+            approach: None,
         })
     }
 

@@ -267,13 +267,13 @@ fn pentagon_radius() -> f64 {
 
 /// Exact SDF of an axis-aligned 2D box with centre `c` and half-extents `h`.
 /// Twin: `obj_sd_box2`.
-fn sd_box2(p: DVec2, c: DVec2, h: DVec2) -> f64 {
+pub(super) fn sd_box2(p: DVec2, c: DVec2, h: DVec2) -> f64 {
     let d = (p - c).abs() - h;
     d.max(DVec2::ZERO).length() + d.x.max(d.y).min(0.0)
 }
 
 /// Exact SDF of an axis-aligned box with centre `c` and half-extents `h`. Twin: `obj_sd_box3`.
-fn sd_box3(p: DVec3, c: DVec3, h: DVec3) -> f64 {
+pub(super) fn sd_box3(p: DVec3, c: DVec3, h: DVec3) -> f64 {
     let d = (p - c).abs() - h;
     d.max(DVec3::ZERO).length() + d.x.max(d.y).max(d.z).min(0.0)
 }

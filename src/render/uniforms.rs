@@ -88,9 +88,11 @@ pub struct FrameUniform {
     pub pressed_rect: [u32; 4],
     /// The texels the elastomer's meridians pass runs over (`Footprint::meridians`).
     pub meridian_rect: [u32; 4],
+    /// A sized primitive's sizes (`Primitive::gpu_size`); zero for other objects.
+    pub object_size: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 176);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 192);
 
 /// `object_kind` of a loaded mesh's baked SDF grid (WGSL `GRID_OBJECT`).
 pub const GRID_OBJECT: u32 = 100;
@@ -203,10 +205,12 @@ impl SensorUniform {
     }
 }
 
-/// `object_kind` of an object: a built-in solid's id, or [`GRID_OBJECT`] for a mesh.
+/// `object_kind` of an object: a built-in solid's id, a primitive's kind, or
+/// [`GRID_OBJECT`] for a mesh.
 pub fn object_kind(object: &Object) -> u32 {
     match object {
         Object::Solid(s) => s.id(),
+        Object::Primitive { shape, .. } => shape.kind(),
         Object::Mesh { .. } => GRID_OBJECT,
     }
 }
@@ -260,7 +264,7 @@ impl FrameUniform {
         let row = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
         let kind = object_kind(object);
         let (dims, grid_origin) = match object {
-            Object::Solid(_) => ([0; 3], [0.0; 4]),
+            Object::Solid(_) | Object::Primitive { .. } => ([0; 3], [0.0; 4]),
             Object::Mesh { grid, .. } => (
                 grid.dims,
                 [
@@ -291,6 +295,10 @@ impl FrameUniform {
             image_pitch: 0,
             pressed_rect: rect4(footprint.map(|f| f.pressed)),
             meridian_rect: rect4(footprint.map(|f| f.meridians)),
+            object_size: match object {
+                Object::Primitive { shape, .. } => shape.gpu_size(),
+                _ => [0.0; 4],
+            },
         }
     }
 }

@@ -1,10 +1,10 @@
-//! How an object is held against the finger ([`Hold`], [`Press`])
-//! and where that puts it ([`Press::pose`]): at a place, brought along the normal to its
-//! first touch and pressed on, or as a rigid pose.
+//! One object held against the finger ([`Press`]) and where that puts it
+//! ([`Press::pose`]): at a place, brought along the normal to its first touch and pressed
+//! on, or as a rigid pose.
 
 use super::first_touch::{first_touch, touching_offset, FirstTouch};
-use super::Place;
-use crate::error::{quoted, GeltipError, Result};
+use super::{Hold, Place};
+use crate::error::{GeltipError, Result};
 use crate::finger::{Finger, Region, SurfaceCoord, SurfacePoint};
 use crate::object::Object;
 use crate::render::contact::max_trace_depth;
@@ -13,29 +13,14 @@ use crate::sensor::Sensor;
 use glam::{DMat3, DVec3};
 use std::sync::Arc;
 
-/// How an object is held against the finger.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Hold {
-    /// At a place on the surface: the object's axis along the inward normal, spun about it,
-    /// tilted `tilt_deg` away from it towards the tangent direction `tilt_towards_deg`
-    /// (measured from the meridian away from the tip, towards increasing azimuth), then
-    /// brought along the normal until it first touches the undeformed finger and pressed
-    /// `depth_mm` further.
-    Surface {
-        place: Place,
-        azimuth_deg: f64,
-        spin_deg: f64,
-        tilt_deg: f64,
-        tilt_towards_deg: f64,
-        depth_mm: f64,
-    },
-    /// A rigid pose in the camera frame: object-local points p map to
-    /// `world_from_object * p + origin`. The press depth is whatever the pose implies: how far
-    /// the object lies beyond its first touch along its own +z axis.
-    Pose {
-        world_from_object: DMat3,
-        origin: DVec3,
-    },
+/// Where a rigid pose puts its object against the finger ([`Press::pose_if_touching`]'s
+/// answer, before it becomes a pose or an error).
+enum Rigid {
+    Touching(Box<ContactPose>),
+    /// Short of touching by this much along its approach.
+    Short(f64),
+    /// Not touching, nor would it moving along its approach.
+    Never,
 }
 
 /// One object held against the finger, in any pose: what every render call takes.
@@ -93,129 +78,6 @@ impl ContactPose {
     }
 }
 
-/// The numbers of a pose given as text (`--pose`, or a string in Python): separated by
-/// commas or whitespace. Errors name the contact field `pose`; [`Hold::from_pose`] checks
-/// how many there are and what they describe.
-pub fn pose_numbers(text: &str) -> Result<Vec<f64>> {
-    text.split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|t| !t.is_empty())
-        .map(|t| {
-            t.parse::<f64>()
-                .map_err(|_| GeltipError::contact("pose", format!("{} is not a number", quoted(t))))
-        })
-        .collect()
-}
-
-impl Hold {
-    /// A rigid pose from 16 numbers (a row-major 4x4 matrix whose last row is 0 0 0 1 and
-    /// whose 3x3 part is orthonormal) or 7 (position x y z and unit quaternion w x y z), in
-    /// the camera frame. Errors name the contact field `pose`.
-    pub fn from_pose(v: &[f64]) -> Result<Hold> {
-        let bad = |reason: String| GeltipError::contact("pose", reason);
-        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
-            return Err(bad(format!("{x} is not a finite number")));
-        }
-        match v.len() {
-            16 => {
-                let r = DMat3::from_cols(
-                    DVec3::new(v[0], v[4], v[8]),
-                    DVec3::new(v[1], v[5], v[9]),
-                    DVec3::new(v[2], v[6], v[10]),
-                );
-                if (v[12], v[13], v[14], v[15]) != (0.0, 0.0, 0.0, 1.0) {
-                    return Err(bad("the matrix's last row must be 0 0 0 1".into()));
-                }
-                let err = (r.transpose() * r - DMat3::IDENTITY)
-                    .to_cols_array()
-                    .iter()
-                    .fold(0.0f64, |m, x| m.max(x.abs()));
-                // Orthonormal of either handedness: the frame `at` places objects in (x along
-                // the meridian, y along the azimuth, z inward) is left-handed, and its labels'
-                // matrices must load back as the same pose.
-                if err > 1e-6 {
-                    return Err(bad(format!(
-                        "the matrix's 3x3 part is not a rotation (orthonormal to {err:.2e}, not 1e-6)"
-                    )));
-                }
-                Ok(Hold::Pose {
-                    world_from_object: r,
-                    origin: DVec3::new(v[3], v[7], v[11]),
-                })
-            }
-            7 => {
-                let q = glam::DQuat::from_xyzw(v[4], v[5], v[6], v[3]);
-                if (q.length() - 1.0).abs() > 1e-6 {
-                    return Err(bad(format!(
-                        "the quaternion w x y z must have length 1, got {:.6}",
-                        q.length()
-                    )));
-                }
-                Ok(Hold::Pose {
-                    world_from_object: DMat3::from_quat(q),
-                    origin: DVec3::new(v[0], v[1], v[2]),
-                })
-            }
-            n => Err(bad(format!(
-                "expected 16 numbers (row-major 4x4 matrix) or 7 (x y z qw qx qy qz), got {n}"
-            ))),
-        }
-    }
-
-    /// Checks the hold's numbers, whatever the sensor: finite, a press depth that is not
-    /// negative, a tilt inside (-90, 90) degrees. Errors name the contact's fields.
-    pub fn check(&self) -> Result<()> {
-        let finite = |field: &str, v: f64| {
-            if v.is_finite() {
-                Ok(())
-            } else {
-                Err(GeltipError::contact(
-                    field,
-                    format!("must be a finite number, got {v}"),
-                ))
-            }
-        };
-        match *self {
-            Hold::Surface {
-                place: _,
-                azimuth_deg,
-                spin_deg,
-                tilt_deg,
-                tilt_towards_deg,
-                depth_mm,
-            } => {
-                finite("azimuth", azimuth_deg)?;
-                finite("spin", spin_deg)?;
-                finite("tilt", tilt_deg)?;
-                finite("tilt_towards", tilt_towards_deg)?;
-                finite("depth", depth_mm)?;
-                if depth_mm < 0.0 {
-                    return Err(GeltipError::contact(
-                        "depth",
-                        format!("a press depth cannot be negative, got {depth_mm} mm"),
-                    ));
-                }
-                if !(0.0..90.0).contains(&tilt_deg.abs()) {
-                    return Err(GeltipError::contact(
-                        "tilt",
-                        format!("must lie in (-90, 90) degrees, got {tilt_deg}"),
-                    ));
-                }
-                Ok(())
-            }
-            Hold::Pose {
-                world_from_object,
-                origin,
-            } => {
-                if world_from_object.is_finite() && origin.is_finite() {
-                    Ok(())
-                } else {
-                    Err(GeltipError::contact("pose", "must be finite numbers"))
-                }
-            }
-        }
-    }
-}
-
 impl Press {
     /// `object` pressed `depth_mm` into the finger at `place`, `azimuth_deg` about the
     /// finger's axis (0 = image +x), its axis along the inward normal: the paper's taps.
@@ -262,49 +124,103 @@ impl Press {
                 tilt_towards_deg,
                 depth_mm,
             } => {
-                let f = &sensor.finger;
-                let coord = coord_of(sensor, place, azimuth_deg)?;
-                let sp = f.point_at(coord);
-                let frame = object_frame(f, coord, &sp, spin_deg, tilt_deg, tilt_towards_deg);
-                let touch = self.touch_on_normal(sensor, frame, &sp, place)?;
-                // A top point on the normal touches at offset 0 exactly: the classic bound
-                // on how deep the object reaches holds; otherwise trace the whole shell.
-                let plain = touch.offset_mm == 0.0 && tilt_deg == 0.0;
-                let trace_depth_mm = if plain {
-                    max_trace_depth(f, depth_mm)
-                } else {
-                    max_trace_depth(f, f64::INFINITY)
-                };
-                check_reach(sensor, &self.object, trace_depth_mm)?;
-                let push = depth_mm - touch.offset_mm;
-                let pose = ContactPose {
-                    point: sp.point,
-                    normal: sp.normal,
-                    coord,
-                    region: sp.region,
-                    world_from_object: frame,
-                    origin: sp.point - push * sp.normal,
-                    depth_mm,
-                    first_touch_offset_mm: touch.offset_mm,
-                    first_touch: touch.band.iter().map(|&c| f.point_at(c).point).collect(),
-                    trace_depth_mm,
-                };
-                check_not_through(sensor, &self.object, &pose, -sp.normal).map_err(|most| {
-                    GeltipError::contact(
-                        "depth",
-                        format!(
-                            "the {} pressed {depth_mm} mm deep at {} {most}",
-                            self.name(),
-                            place.label()
-                        ),
-                    )
-                })?;
-                Ok(pose)
+                let hold = (azimuth_deg, spin_deg, tilt_deg, tilt_towards_deg);
+                self.surface_pose(sensor, place, hold, depth_mm)
             }
             Hold::Pose {
                 world_from_object,
                 origin,
-            } => self.rigid_pose(sensor, world_from_object, origin),
+                approach,
+            } => {
+                let along = match approach {
+                    Some(_) => "its approach",
+                    None => "its +z axis",
+                };
+                match self.rigid_pose(sensor, world_from_object, origin, approach)? {
+                    Rigid::Touching(pose) => Ok(*pose),
+                    Rigid::Short(mm) => Err(GeltipError::contact(
+                        "pose",
+                        format!(
+                            "the object does not touch the finger: it is {mm:.3} mm short of touching along {along}"
+                        ),
+                    )),
+                    Rigid::Never => Err(GeltipError::contact(
+                        "pose",
+                        format!(
+                            "the object does not touch the finger, nor would it moving along {along}"
+                        ),
+                    )),
+                }
+            }
+        }
+    }
+
+    /// The pose of a hold at `place`: `(azimuth, spin, tilt, tilt towards)` in degrees,
+    /// brought along the normal to its first touch and pressed `depth_mm` further.
+    fn surface_pose(
+        &self,
+        sensor: &Sensor,
+        place: Place,
+        (azimuth_deg, spin_deg, tilt_deg, tilt_towards_deg): (f64, f64, f64, f64),
+        depth_mm: f64,
+    ) -> Result<ContactPose> {
+        let f = &sensor.finger;
+        let coord = coord_of(sensor, place, azimuth_deg)?;
+        let sp = f.point_at(coord);
+        let frame = object_frame(f, coord, &sp, spin_deg, tilt_deg, tilt_towards_deg);
+        let touch = self.touch_on_normal(sensor, frame, &sp, place)?;
+        // A top point on the normal touches at offset 0 exactly: the classic bound on how
+        // deep the object reaches holds; otherwise trace the whole shell.
+        let plain = touch.offset_mm == 0.0 && tilt_deg == 0.0;
+        let trace_depth_mm = if plain {
+            max_trace_depth(f, depth_mm)
+        } else {
+            max_trace_depth(f, f64::INFINITY)
+        };
+        check_reach(sensor, &self.object, trace_depth_mm)?;
+        let push = depth_mm - touch.offset_mm;
+        let pose = ContactPose {
+            point: sp.point,
+            normal: sp.normal,
+            coord,
+            region: sp.region,
+            world_from_object: frame,
+            origin: sp.point - push * sp.normal,
+            depth_mm,
+            first_touch_offset_mm: touch.offset_mm,
+            first_touch: touch.band.iter().map(|&c| f.point_at(c).point).collect(),
+            trace_depth_mm,
+        };
+        check_not_through(sensor, &self.object, &pose, -sp.normal).map_err(|most| {
+            GeltipError::contact(
+                "depth",
+                format!(
+                    "the {} pressed {depth_mm} mm deep at {} {most}",
+                    self.name(),
+                    place.label()
+                ),
+            )
+        })?;
+        Ok(pose)
+    }
+
+    /// As [`Press::pose`], but a rigid pose that does not touch the finger (short of it, or
+    /// never touching along its approach) is `None` rather than an error: for callers that
+    /// hold objects wherever a simulation puts them and render whichever touch.
+    pub fn pose_if_touching(&self, sensor: &Sensor) -> Result<Option<ContactPose>> {
+        self.hold.check()?;
+        match self.hold {
+            Hold::Pose {
+                world_from_object,
+                origin,
+                approach,
+            } => Ok(
+                match self.rigid_pose(sensor, world_from_object, origin, approach)? {
+                    Rigid::Touching(pose) => Some(*pose),
+                    Rigid::Short(_) | Rigid::Never => None,
+                },
+            ),
+            Hold::Surface { .. } => self.pose(sensor).map(Some),
         }
     }
 
@@ -334,39 +250,36 @@ impl Press {
         })
     }
 
-    /// The pose of a rigid hold: the depth is how far the object lies beyond its first touch
-    /// along its own +z axis.
+    /// Where a rigid hold puts the object: touching (its depth is how far the object lies
+    /// beyond its first touch moving along `approach`, or its own +z axis), short of
+    /// touching, or never touching.
     fn rigid_pose(
         &self,
         sensor: &Sensor,
         world_from_object: DMat3,
         origin: DVec3,
-    ) -> Result<ContactPose> {
+        approach: Option<DVec3>,
+    ) -> Result<Rigid> {
         let f = &sensor.finger;
         let grid = HeightfieldGrid::for_sensor(sensor);
         let object = self.object.as_ref();
-        // Backing off along the object's own -z (its +z points at the finger).
-        let b = -(world_from_object * DVec3::Z).normalize();
+        // Backing off: against the approach (the object's +z points at the finger).
+        let b = -approach.unwrap_or_else(|| (world_from_object * DVec3::Z).normalize());
         // Anywhere along its axis: from beyond the finger's far side to its top.
         let clear = object.bounding_radius() + 1e-3;
         let span = origin.length() + f.radius + f.cylinder_length + clear;
-        let touch = match first_touch(f, &grid, object, world_from_object, origin, b, (-span, span)) {
+        let touch = match first_touch(
+            f,
+            &grid,
+            object,
+            world_from_object,
+            origin,
+            b,
+            (-span, span),
+        ) {
             Some(t) if t.offset_mm >= 0.0 => t,
-            Some(t) => {
-                return Err(GeltipError::contact(
-                    "pose",
-                    format!(
-                        "the object does not touch the finger: it is {:.3} mm short of touching along its +z axis",
-                        -t.offset_mm
-                    ),
-                ))
-            }
-            None => {
-                return Err(GeltipError::contact(
-                    "pose",
-                    "the object does not touch the finger, nor would it moving along its +z axis",
-                ))
-            }
+            Some(t) => return Ok(Rigid::Short(-t.offset_mm)),
+            None => return Ok(Rigid::Never),
         };
         let trace_depth_mm = max_trace_depth(f, f64::INFINITY);
         check_reach(sensor, object, trace_depth_mm)?;
@@ -393,7 +306,7 @@ impl Press {
                 ),
             )
         })?;
-        Ok(pose)
+        Ok(Rigid::Touching(Box::new(pose)))
     }
 }
 

@@ -40,6 +40,10 @@ pub struct ContactSpec {
     /// (x y z qw qx qy qz), in the camera frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<Vec<f64>>,
+    /// With a pose: the direction (3 numbers, camera frame) the object moves in to press the
+    /// finger, along which its depth is measured (default: the object's +z axis).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub approach: Option<Vec<f64>>,
 }
 
 /// A place as given: the text `rotation=<deg>`, `translation=<mm>` or `s=<mm>`, or a table of
@@ -112,12 +116,14 @@ impl ContactSpec {
             Hold::Pose {
                 world_from_object: r,
                 origin: o,
+                approach,
             } => {
                 let rows = r.transpose().to_cols_array();
                 spec.pose = Some(vec![
                     rows[0], rows[1], rows[2], o.x, rows[3], rows[4], rows[5], o.y, rows[6],
                     rows[7], rows[8], o.z, 0.0, 0.0, 0.0, 1.0,
                 ]);
+                spec.approach = approach.map(|a| a.to_array().to_vec());
             }
         }
         spec
@@ -143,9 +149,19 @@ impl ContactSpec {
                         ));
                     }
                 }
-                Hold::from_pose(pose)?
+                let hold = Hold::from_pose(pose)?;
+                match &self.approach {
+                    Some(approach) => hold.approaching(approach)?,
+                    None => hold,
+                }
             }
             None => {
+                if self.approach.is_some() {
+                    return Err(GeltipError::contact(
+                        "approach",
+                        "is for a pose (a place presses along the surface normal)",
+                    ));
+                }
                 let at = self.at.as_ref().ok_or_else(|| {
                     GeltipError::contact(
                         "at",

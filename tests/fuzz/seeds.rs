@@ -69,7 +69,8 @@ pub fn scene_jsons() -> Vec<Vec<u8>> {
     let with_all = format!(
         r#"{{"contacts": [
   {{"object": "sphere", "at": {{"rotation": 30}}, "azimuth": 10, "spin": 5, "tilt": 20, "tilt_towards": 90, "depth": 1}},
-  {{"object": "cone", "pose": [{}]}}
+  {{"object": "cone", "pose": [{}]}},
+  {{"object": "box:x=10,y=6,z=4", "pose": [1, 0, 0, 11.5, 0, 1, 0, 0, 0, 0, 1, 12, 0, 0, 0, 1], "approach": [-1, 0, 0]}}
 ]}}"#,
         numbers(&pose)
     );
@@ -195,6 +196,17 @@ pub fn pose_texts() -> Vec<Vec<u8>> {
         numbers(&m).into_bytes(),
         seven.map(|v| v.to_string()).join(" ").into_bytes(),
     ]
+}
+
+pub fn primitive_texts() -> Vec<Vec<u8>> {
+    geltip::object::primitive::PRIMITIVE_SYNTAX
+        .split(", ")
+        .chain([
+            "ellipsoid:x=3.5,y=12,z=0.75",
+            " capsule : r = 0.5 , l = 40 ",
+        ])
+        .map(|s| s.as_bytes().to_vec())
+        .collect()
 }
 
 pub fn place_texts() -> Vec<Vec<u8>> {

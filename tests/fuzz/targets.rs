@@ -7,7 +7,7 @@ use super::{Fed, Format, Target};
 use geltip::evaluate::{self, Detector, Found, Predictions};
 use geltip::jobs::dataset;
 use geltip::localise::{self, Localiser, Method};
-use geltip::object::Mesh;
+use geltip::object::{Mesh, Object, Primitive};
 use geltip::render::{ContactPose, Hold, Place, Press};
 use geltip::scene::{load_scene, pose_numbers, At, ContactSpec};
 use geltip::Sensor;
@@ -20,7 +20,7 @@ const CI: usize = 2000;
 
 /// Every target: name, input format, seeds, feed, CI cases. One row a parser.
 #[rustfmt::skip]
-static TARGETS: [Target; 18] = [
+static TARGETS: [Target; 19] = [
     t("sensor toml", Format::Toml, seeds::sensor_tomls, sensor_toml, CI),
     t("scene json", Format::Json, seeds::scene_jsons, scene_json, CI),
     t("scene toml", Format::Toml, seeds::scene_tomls, scene_toml, CI),
@@ -32,6 +32,7 @@ static TARGETS: [Target; 18] = [
     t("png dataset background", Format::Png, seeds::small_frames, png_background, CI),
     t("pose text", Format::Words, seeds::pose_texts, pose_text, CI),
     t("place text", Format::Words, seeds::place_texts, place_text, CI),
+    t("primitive text", Format::Words, seeds::primitive_texts, primitive_text, CI),
     t("resume dataset.json", Format::Json, resume_manifests, resume_manifest, CI),
     t("resume labels.jsonl", Format::JsonLines, seeds::labels_jsonl, resume_labels, CI),
     t("merge dataset.json", Format::Json, merge_manifests, merge_manifest, CI),
@@ -300,6 +301,23 @@ fn place_text(_: &Path, input: &[u8]) -> Fed {
     let placed =
         Place::parse(&text).and_then(|place| Press::at(sphere(), place, 30.0, 1.0).pose(paper()));
     verdict(placed, |pose| check_pose(&pose))
+}
+
+/// A primitive's text (`--object box:x=10,y=6,z=4`), pressed 1 mm at a place when it parses.
+fn primitive_text(_: &Path, input: &[u8]) -> Fed {
+    let text = String::from_utf8_lossy(input);
+    let placed = Primitive::parse(&text).and_then(|p| match p {
+        Some(p) => Press::at(
+            Arc::new(Object::primitive(p)),
+            Place::Rotation(30.0),
+            45.0,
+            1.0,
+        )
+        .pose(paper())
+        .map(Some),
+        None => Ok(None),
+    });
+    verdict(placed, |pose| pose.map_or(Ok(()), |p| check_pose(&p)))
 }
 
 fn resume_manifests() -> Vec<Vec<u8>> {

@@ -45,6 +45,10 @@ use wgpu::util::DeviceExt;
 /// Frames recorded into one submission at most.
 pub const MAX_BATCH: usize = 8;
 
+/// A contact a frame of [`Renderer::render_scenes`] shows: its index in the frame's list of
+/// presses, and its labels.
+pub type Shown = (usize, GroundTruth);
+
 /// Seconds spent in each phase of the last batch.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Timings {
@@ -218,6 +222,42 @@ impl Renderer {
             .map(|contacts| (contacts, self.next_noise_seed()))
             .collect();
         self.render_frames(scenes, Duration::ZERO)
+    }
+
+    /// Renders frames of several objects each (any number of frames, [`MAX_BATCH`] to a
+    /// submission), as [`Renderer::render_scene`] renders one, each frame drawing its noise
+    /// seed in turn. With `skip_untouching`, rigid poses that do not touch the finger are
+    /// left out of their frame ([`Press::pose_if_touching`]) instead of failing the call, and
+    /// a frame none of whose objects touch is the empty finger. Each frame comes with the
+    /// labels of the contacts it shows and their indices in its list.
+    pub fn render_scenes(
+        &mut self,
+        frames: &[Vec<Press>],
+        skip_untouching: bool,
+    ) -> Result<Vec<(Frame, Vec<Shown>)>> {
+        let mut out = Vec::with_capacity(frames.len());
+        let mut total = Timings::default();
+        let preparer = self.preparer();
+        for chunk in frames.chunks(MAX_BATCH) {
+            let start = Instant::now();
+            let (batch, kept) = if skip_untouching {
+                preparer.prepare_touching(chunk)?
+            } else {
+                let all = chunk.iter().map(|f| (0..f.len()).collect()).collect();
+                (preparer.prepare_frames(chunk)?, all)
+            };
+            total.prepare += start.elapsed();
+            let frames = self.render_prepared_frames(batch)?;
+            total.add(&self.timings);
+            out.extend(
+                frames
+                    .into_iter()
+                    .zip(kept)
+                    .map(|((frame, truths), kept)| (frame, kept.into_iter().zip(truths).collect())),
+            );
+        }
+        self.timings = total;
+        Ok(out)
     }
 
     /// Renders several objects pressed into the finger at once, as one frame: the skin is

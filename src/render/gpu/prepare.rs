@@ -7,6 +7,7 @@ use crate::render::contact::{self, Footprint, IndentationLabels};
 use crate::render::uniforms::FrameUniform;
 use crate::render::Rect;
 use crate::render::{elastomer, ContactPose, GroundTruth, HeightfieldGrid, Hold, Press};
+use crate::scene::naming_contact;
 use crate::sensor::Sensor;
 use rayon::prelude::*;
 
@@ -84,6 +85,38 @@ impl Preparer {
             .map(PreparedBatch)
     }
 
+    /// Prepares frames of several contacts each for one submission, a frame each, leaving
+    /// out the rigid poses that do not touch the finger ([`Press::pose_if_touching`]): the
+    /// batch, and for each frame the indices (in its list) of the contacts kept. Every
+    /// contact of every frame is prepared side by side on rayon's threads; an error names
+    /// the contact in its frame (`contacts[1].pose: ...`).
+    pub fn prepare_touching(
+        &self,
+        frames: &[Vec<Press>],
+    ) -> Result<(PreparedBatch, Vec<Vec<usize>>)> {
+        let contacts: Vec<(usize, usize, &Press)> = frames
+            .iter()
+            .enumerate()
+            .flat_map(|(f, presses)| presses.iter().enumerate().map(move |(k, p)| (f, k, p)))
+            .collect();
+        let prepared = contacts
+            .par_iter()
+            .map(|&(f, k, press)| {
+                let pose = press
+                    .pose_if_touching(&self.sensor)
+                    .map_err(|e| naming_contact(e, k))?;
+                Ok(pose.map(|pose| (f, k, prepare_posed(&self.sensor, &self.grid, press, pose))))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut batch: Vec<Vec<Prepared>> = frames.iter().map(|_| Vec::new()).collect();
+        let mut kept: Vec<Vec<usize>> = frames.iter().map(|_| Vec::new()).collect();
+        for (f, k, p) in prepared.into_iter().flatten() {
+            batch[f].push(p);
+            kept[f].push(k);
+        }
+        Ok((PreparedBatch(batch), kept))
+    }
+
     /// Prepares the presses of one scene, side by side on rayon's threads (each scan inside
     /// is parallel too, but a contact's own serial steps, such as its first-touch
     /// refinement, are not).
@@ -108,17 +141,26 @@ pub(super) fn too_many(n: usize) -> GeltipError {
 
 /// Pose, footprint and frame uniform of one press.
 fn prepare(sensor: &Sensor, grid: &HeightfieldGrid, press: &Press) -> Result<Prepared> {
-    let pose = press.pose(sensor)?;
+    Ok(prepare_posed(sensor, grid, press, press.pose(sensor)?))
+}
+
+/// Footprint and frame uniform of one press placed at `pose`.
+fn prepare_posed(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    press: &Press,
+    pose: ContactPose,
+) -> Prepared {
     let reach = elastomer::blend_reach_mm(&sensor.config.elastomer);
     let footprint = contact::footprint(sensor, grid, &pose, &press.object, reach);
     let max_depth = pose.trace_depth_mm;
     let uniform = FrameUniform::contact(&pose, &press.object, max_depth, footprint, 0);
-    Ok(Prepared {
+    Prepared {
         uniform,
         press: press.clone(),
         pose,
         footprint,
-    })
+    }
 }
 
 /// The labels of one press, from its pose and (on the CPU, over its footprint's texels) the
