@@ -334,3 +334,88 @@ fn bad_frames_are_refused_on_one_line() -> Result<()> {
     assert!(e.contains("line 1") && e.contains("at"), "{e}");
     Ok(())
 }
+
+/// A sensor file as `geltip calibrate` writes it (listed LEDs, ambient light, vignetting,
+/// per-channel noise) runs through every command that takes a sensor.
+#[test]
+fn every_command_takes_a_calibrated_sensor_file() -> Result<()> {
+    use std::process::Command;
+    let dir = tempdir("commands")?;
+    let mut c = hidden_sensor().config;
+    c.light.vignetting = [-0.3, 0.1];
+    c.render.noise = Noise::Rgb([1.0, 2.0, 0.5]);
+    let path = dir.join("sensor.toml");
+    std::fs::write(&path, geltip::jobs::calibrate::sensor_toml(&c)?)?;
+    let sensor = path.to_str().unwrap();
+    let out = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let runs: Vec<Vec<String>> = vec![
+        vec![
+            "render",
+            "--sensor",
+            sensor,
+            "--object",
+            "sphere",
+            "--at",
+            "rotation=30",
+            "--depth",
+            "1",
+            "-o",
+            &out("sphere.png"),
+        ],
+        vec![
+            "dataset",
+            "--sensor",
+            sensor,
+            "--count",
+            "3",
+            "--seed",
+            "1",
+            "--out",
+            &out("set"),
+        ],
+        vec!["preview", "--sensors", sensor, "--out", &out("preview")],
+        vec![
+            "stability",
+            "--sensor",
+            sensor,
+            "--positions",
+            "3",
+            "--azimuths",
+            "1",
+            "--out",
+            &out("stability"),
+        ],
+        vec![
+            "evaluate",
+            "--suite",
+            "paper",
+            "--sensor",
+            sensor,
+            "--method",
+            "surface",
+            "--out",
+            &out("evaluate"),
+        ],
+    ]
+    .into_iter()
+    .map(|v| v.into_iter().map(String::from).collect())
+    .collect();
+    for args in runs {
+        let done = Command::new(env!("CARGO_BIN_EXE_geltip"))
+            .args(&args)
+            .output()?;
+        assert!(
+            done.status.success(),
+            "geltip {}: {}",
+            args[0],
+            String::from_utf8_lossy(&done.stderr)
+        );
+    }
+    // The calibrated look reaches the files: the dataset's set keeps the sensor's light.
+    let manifest = std::fs::read_to_string(dir.join("set").join("dataset.json"))?;
+    assert!(
+        manifest.contains("vignetting") && manifest.contains("azimuth_deg"),
+        "{manifest}"
+    );
+    Ok(())
+}
