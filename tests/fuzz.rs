@@ -1,5 +1,6 @@
 //! Fuzz tests of every parser a user feeds (sensor TOML, scene files, meshes, PNG frames,
-//! poses and places, a dataset's files on resume and merge): structure-aware mutations of
+//! poses and places, a dataset's files on resume and merge, predictions, a calibration's
+//! contacts file and empty frames): structure-aware mutations of
 //! real inputs, each case refused with a one-line error or accepted with a sound value,
 //! never a panic or a hang. See `tests/fuzz/mod.rs`; `cargo bench --bench fuzz -- --cases N`
 //! runs longer. `GELTIP_FUZZ_CASES=N` sets every target's cases here.
@@ -117,6 +118,16 @@ fn evaluate_predictions_jsonl() {
 #[test]
 fn evaluate_detector_answer() {
     check("evaluate detector answer");
+}
+
+#[test]
+fn calibrate_contacts_jsonl() {
+    check("calibrate contacts.jsonl");
+}
+
+#[test]
+fn png_calibrate_empty_frame() {
+    check("png calibrate empty frame");
 }
 
 /// Every target in the table has a test above.

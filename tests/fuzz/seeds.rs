@@ -45,7 +45,60 @@ pub fn small() -> &'static Sensor {
 pub fn sensor_tomls() -> Vec<Vec<u8>> {
     let mut seeds: Vec<Vec<u8>> = PRESETS.iter().map(|(_, t)| t.as_bytes().to_vec()).collect();
     seeds.push(small_toml().into_bytes());
+    seeds.push(calibrated_toml().into_bytes());
     seeds
+}
+
+/// A sensor file as `geltip calibrate` writes it: listed LEDs, ambient light, vignetting,
+/// a coloured paint, noise per channel.
+pub fn calibrated_toml() -> String {
+    small_toml()
+        + r#"
+[[leds]]
+colour = [1.0, 0.25, 0.8]
+azimuth_deg = 250.0
+z_mm = -1.5
+radius_mm = 4.0
+intensity = 2.5
+spread = 3.0
+falloff_mm = 8.0
+
+[[leds]]
+colour = [0.2, 1.0, 0.4]
+azimuth_deg = 20.0
+
+[light]
+ambient = [0.1, 0.05, 0.3]
+vignetting = [-0.3, 0.1]
+
+[paint]
+colour = [0.9, 0.8, 1.0]
+specular = 0.4
+shininess = 17.5
+
+[render]
+noise = [1.5, 2.0, 0.5]
+"#
+}
+
+/// Lines of a calibration's contacts file (each names `c.png`, which the feed writes).
+pub fn calibrate_contacts() -> Vec<Vec<u8>> {
+    let pose = pose_of("cone", Place::Rotation(40.0), 120.0, 0.8);
+    vec![
+        concat!(
+            r#"{"image": "c.png", "object": "sphere", "at": "rotation=30", "azimuth": 45, "depth": 1}"#,
+            "\n",
+            r#"{"image": "c.png", "object": "box:x=6,y=4,z=3", "at": {"translation": 4}, "depth": 0.5, "spin": 30}"#,
+            "\n"
+        )
+        .as_bytes()
+        .to_vec(),
+        format!(
+            "{{\"image\": \"c.png\", \"object\": \"cone\", \"pose\": [{}]}}\n",
+            numbers(&pose)
+        )
+        .into_bytes(),
+    ]
 }
 
 /// A real contact's pose as a row-major 4x4 matrix.

@@ -20,7 +20,7 @@ const CI: usize = 2000;
 
 /// Every target: name, input format, seeds, feed, CI cases. One row a parser.
 #[rustfmt::skip]
-static TARGETS: [Target; 19] = [
+static TARGETS: [Target; 21] = [
     t("sensor toml", Format::Toml, seeds::sensor_tomls, sensor_toml, CI),
     t("scene json", Format::Json, seeds::scene_jsons, scene_json, CI),
     t("scene toml", Format::Toml, seeds::scene_tomls, scene_toml, CI),
@@ -40,6 +40,8 @@ static TARGETS: [Target; 19] = [
     t("merge labels.jsonl", Format::JsonLines, merge_labels_seeds, merge_labels, CI),
     t("evaluate predictions.jsonl", Format::JsonLines, seeds::predictions_jsonl, predictions, CI),
     t("evaluate detector answer", Format::Json, seeds::detector_answers, detector_answer, CI),
+    t("calibrate contacts.jsonl", Format::JsonLines, seeds::calibrate_contacts, calibrate_contacts, CI),
+    t("png calibrate empty frame", Format::Png, seeds::small_frames, png_empty_frame, CI),
 ];
 
 const fn t(
@@ -422,6 +424,38 @@ fn predictions(dir: &Path, input: &[u8]) -> Fed {
     verdict(read, |p| {
         let found: Vec<Found> = (0..4).flat_map(|k| p.detections_of(k)).collect();
         check_found(&found)
+    })
+}
+
+/// A calibration's contacts file, its frame `c.png` present.
+fn calibrate_contacts(dir: &Path, input: &[u8]) -> Fed {
+    let frame = dir.join("c.png");
+    if !frame.exists() {
+        image::RgbImage::new(4, 4)
+            .save(&frame)
+            .expect("cannot write a fuzz frame");
+    }
+    let path = file(dir, "contacts.jsonl", input);
+    verdict(geltip::calibrate::contacts::read(&path), |known| {
+        for k in &known {
+            let numbers: Vec<f64> = k.spec.pose.clone().unwrap_or_default();
+            finite("pose", &numbers)?;
+            finite(
+                "contact",
+                &[k.spec.depth, k.spec.azimuth, k.spec.spin, k.spec.tilt].map(|v| v.unwrap_or(0.0)),
+            )?;
+        }
+        Ok(())
+    })
+}
+
+/// An empty frame for `geltip calibrate`: loaded, checked and its image circle found.
+fn png_empty_frame(dir: &Path, input: &[u8]) -> Fed {
+    use geltip::calibrate::{circle, frames::EmptyFrames};
+    let path = file(dir, "empty.png", input);
+    let found = EmptyFrames::load(&[path]).and_then(|f| circle::find(&f.mean));
+    verdict(found, |c| {
+        finite("circle", &[c.centre.x, c.centre.y, c.radius, c.rms_px])
     })
 }
 
