@@ -116,6 +116,14 @@ fn paper_experiment_end_to_end() {
     let paper = report.summary(Method::Paper, |_| true);
     assert_eq!(paper.detected + paper.missed, 56);
     let md = std::fs::read_to_string(dir.join("tables.md")).unwrap();
+    // The tables as the command printed them when they were last checked by hand
+    // (tests/reference/): a change to the renderer or a detector that moves any figure
+    // shows here, and the reference is then regenerated on purpose.
+    assert_eq!(
+        md,
+        include_str!("reference/experiment_paper_tables.md"),
+        "the experiment's tables changed"
+    );
     for needle in [
         "π/6",
         "15 mm",

@@ -265,3 +265,19 @@ fn tradeoff_marks_the_front_and_the_default() {
         .contains("Pareto front"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The stability sweep's tables on the paper sensor, as the command printed them when they
+/// were last checked by hand (tests/reference/): the sweep scores through the evaluate
+/// module, and any change to a detector, the renderer or the scoring that moves a figure
+/// shows here; the reference is then regenerated on purpose.
+#[test]
+fn stability_tables_on_the_paper_sensor() {
+    gpu_env();
+    let s = Sensor::preset("paper").unwrap();
+    let report = stability::run(&s, &stability::Sweep::default_for(&s), None, |_, _| {}).unwrap();
+    assert_eq!(
+        report.markdown(),
+        include_str!("reference/stability_paper.md"),
+        "the stability tables changed"
+    );
+}
