@@ -31,6 +31,17 @@ pub enum GeltipError {
     #[error("{}: {}", OneLine(.field), OneLine(.reason))]
     InvalidContact { field: String, reason: String },
 
+    /// An option of a job holds a value the job cannot run with; `option` is the name the
+    /// library gives it (a field of the job's spec or an argument of its function: `count`,
+    /// `depth_range`, `out`...), so a front end can name its own flag or argument instead,
+    /// and `value` is the value as given, when the message shows it.
+    #[error("{}: {}", OneLine(named(.option, .value.as_deref())), OneLine(.reason))]
+    InvalidOption {
+        option: String,
+        value: Option<String>,
+        reason: String,
+    },
+
     /// A mesh file that cannot be used as an object.
     #[error("mesh {}: {}", OneLine(.path.display()), OneLine(.reason))]
     InvalidMesh { path: PathBuf, reason: String },
@@ -88,12 +99,42 @@ impl GeltipError {
         }
     }
 
+    /// An `InvalidOption` error about the job option `option`.
+    pub fn option(option: impl Into<String>, reason: impl Into<String>) -> Self {
+        GeltipError::InvalidOption {
+            option: option.into(),
+            value: None,
+            reason: reason.into(),
+        }
+    }
+
+    /// An `InvalidOption` error about the job option `option` given as `value`.
+    pub fn option_value(
+        option: impl Into<String>,
+        value: impl std::fmt::Display,
+        reason: impl Into<String>,
+    ) -> Self {
+        GeltipError::InvalidOption {
+            option: option.into(),
+            value: Some(value.to_string()),
+            reason: reason.into(),
+        }
+    }
+
     /// An `Io` error for `path`.
     pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         GeltipError::Io {
             path: path.into(),
             cause,
         }
+    }
+}
+
+/// An option's name, followed by its value when there is one (`shard 3/3`).
+fn named(option: &str, value: Option<&str>) -> String {
+    match value {
+        Some(v) => format!("{option} {v}"),
+        None => option.to_string(),
     }
 }
 
@@ -142,7 +183,9 @@ mod tests {
                 name: "nope".into(),
                 presets: "paper".into(),
             },
-            GeltipError::input("--count", "must be at least 1"),
+            GeltipError::input("sample 3", "no visible contact"),
+            GeltipError::option("count", "must be at least 1"),
+            GeltipError::option_value("shard", "3/3", "the index must be below the count"),
             GeltipError::contact("depth", "a press depth cannot be negative"),
             GeltipError::InvalidMesh {
                 path: "m.obj".into(),
@@ -167,6 +210,7 @@ mod tests {
                 | GeltipError::UnknownSensor { .. }
                 | GeltipError::InvalidInput { .. }
                 | GeltipError::InvalidContact { .. }
+                | GeltipError::InvalidOption { .. }
                 | GeltipError::InvalidMesh { .. }
                 | GeltipError::InvalidImage { .. }
                 | GeltipError::NoAdapter(_)
@@ -193,6 +237,12 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "contacts[0].line\\nbreak: unknown field\\r\\n"
+        );
+        let e = GeltipError::option_value("out", "set\n2", "holds another set");
+        assert_eq!(e.to_string(), "out set\\n2: holds another set");
+        assert_eq!(
+            GeltipError::option("count", "must be at least 1").to_string(),
+            "count: must be at least 1"
         );
         assert_eq!(quoted("s=1\ns=2"), "'s=1\\ns=2'");
         assert_eq!(quoted(&"x".repeat(100)), format!("'{}...'", "x".repeat(60)));

@@ -441,6 +441,44 @@ fn bad_input_gives_one_line_errors() {
     assert_eq!(report["rendered"], 0);
 }
 
+/// The library names a set's options by their own names (the fields of `Spec`, the
+/// arguments of `merge`); only the command line speaks of flags.
+#[test]
+fn library_errors_name_the_options_not_flags() {
+    let sensor = geltip::sensor::Sensor::preset("paper").unwrap();
+    let spec = geltip::jobs::dataset::Spec::new("paper", sensor, 5, 0);
+    let error = |change: &dyn Fn(&mut geltip::jobs::dataset::Spec)| {
+        let mut s = spec.clone();
+        change(&mut s);
+        let e = geltip::jobs::dataset::run(&s, None, |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(!e.contains("--"), "{e}");
+        e
+    };
+    assert_eq!(error(&|s| s.count = 0), "count: must be at least 1, got 0");
+    let e = error(&|s| s.depth_range = (2.0, 1.0));
+    assert!(e.starts_with("depth_range 2..1: needs 0 <= min"), "{e}");
+    let e = error(&|s| s.empty_fraction = 1.0);
+    assert!(e.starts_with("empty_fraction: "), "{e}");
+    let e = error(&|s| s.contacts_per_sample = (0, 2));
+    assert!(e.starts_with("contacts_per_sample 0..2: "), "{e}");
+    let e = error(&|s| s.noise = geltip::sensor::Noise::from(300.0));
+    assert!(e.starts_with("noise: "), "{e}");
+    let e = error(&|s| s.paint_jitter = 1.0);
+    assert!(e.starts_with("paint_jitter: "), "{e}");
+    let e = geltip::jobs::dataset::Shard::parse("3/3")
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("shard 3/3: "), "{e}");
+
+    let root = scratch("library-errors");
+    let e = geltip::jobs::dataset::merge(&root.join("m"), &[], &[])
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "shards: name the shard directories to join");
+}
+
 #[test]
 fn python_snippet_loads_a_set() {
     let has_deps = Command::new("python3")

@@ -21,6 +21,7 @@ impl From<GeltipError> for Failure {
             | GeltipError::UnknownSensor { .. }
             | GeltipError::InvalidInput { .. }
             | GeltipError::InvalidContact { .. }
+            | GeltipError::InvalidOption { .. }
             | GeltipError::InvalidMesh { .. }
             | GeltipError::InvalidImage { .. } => "InvalidArgumentError",
             GeltipError::NoAdapter(_) | GeltipError::Gpu(_) | GeltipError::Shader { .. } => {

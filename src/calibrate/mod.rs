@@ -95,7 +95,7 @@ pub struct Calibration {
 /// Calibrates `options.start` to the frames; `progress` hears each stage's name.
 pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibration> {
     if options.leds > crate::sensor::MAX_LEDS {
-        return Err(GeltipError::input(
+        return Err(GeltipError::option(
             "leds",
             format!(
                 "fits 1 to {} LEDs (0: choose), got {}",
@@ -172,8 +172,7 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
             }
         }
         None => unconstrained.push(
-            "render.noise: one empty frame shows no noise; give several (--empty a.png --empty b.png ...)"
-                .to_string(),
+            "render.noise: one empty frame shows no noise; give several empty frames".to_string(),
         ),
     }
     let contacts = match &options.contacts {
@@ -187,7 +186,7 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
         }
         None => {
             unconstrained.push(
-                "elastomer.blend_mm, elastomer.drape_mm, elastomer.bulge: empty frames show no imprint; give frames with known contacts (--contacts)"
+                "elastomer.blend_mm, elastomer.drape_mm, elastomer.bulge: empty frames show no imprint; give frames with known contacts"
                     .to_string(),
             );
             None

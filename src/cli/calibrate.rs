@@ -1,6 +1,7 @@
 //! `geltip calibrate`: fit a sensor file to a real sensor's frames and write it with its
 //! report and pictures.
 
+use super::under_flags;
 use anyhow::Result;
 use clap::Args;
 use geltip::calibrate::Options;
@@ -45,7 +46,8 @@ pub fn calibrate(args: CalibrateArgs) -> Result<()> {
     options.contacts = args.contacts;
     options.leds = args.leds;
     options.starts = args.starts;
-    let outcome = calibrate::run(&options, &args.out, &|stage| eprintln!("{stage}..."))?;
+    let outcome = calibrate::run(&options, &args.out, &|stage| eprintln!("{stage}..."))
+        .map_err(under_flags(&[]))?;
     let judged = &outcome.judged;
     let c = &judged.calibration;
     println!(

@@ -1,6 +1,6 @@
 //! `geltip dataset`: a labelled synthetic dataset, or shards merged into one.
 
-use super::progress;
+use super::{progress, under_flags};
 use anyhow::{Context, Result};
 use clap::Args;
 use geltip::jobs::dataset;
@@ -75,14 +75,16 @@ pub struct DatasetArgs {
 pub fn dataset(args: DatasetArgs) -> Result<()> {
     let command: Vec<String> = std::env::args().collect();
     if let Some((out, shards)) = args.merge.split_first() {
-        let n = dataset::merge(out, shards, &command)?;
+        let n = dataset::merge(out, shards, &command)
+            .map_err(under_flags(&[("out", "--merge"), ("shards", "--merge")]))?;
         println!("{}", json!({ "merged": out, "samples": n }));
         return Ok(());
     }
     let out = args.out.clone().context("--out is required")?;
     let mut spec = args.spec()?;
     spec.command = command;
-    let report = dataset::run(&spec, Some(&out), progress::reporter("samples")?)?;
+    let report = dataset::run(&spec, Some(&out), progress::reporter("samples")?)
+        .map_err(under_flags(&[]))?;
     println!(
         "{}",
         json!({
@@ -97,8 +99,9 @@ pub fn dataset(args: DatasetArgs) -> Result<()> {
 }
 
 impl DatasetArgs {
-    /// The set the flags describe.
+    /// The set the flags describe; an error about one of the set's options names its flag.
     fn spec(self) -> Result<dataset::Spec> {
+        let flag = under_flags(&[]);
         let (sensor_arg, count) = (
             self.sensor.context("--sensor is required")?,
             self.count.context("--count is required")?,
@@ -113,10 +116,10 @@ impl DatasetArgs {
                 .collect();
         }
         if let Some(r) = self.depth_range {
-            spec.depth_range = dataset::parse_depth_range(&r)?;
+            spec.depth_range = dataset::parse_depth_range(&r).map_err(&flag)?;
         }
         if let Some(s) = self.shard {
-            spec.shard = dataset::Shard::parse(&s)?;
+            spec.shard = dataset::Shard::parse(&s).map_err(&flag)?;
         }
         spec.depth_maps = self.depth_maps;
         spec.masks = self.masks;
@@ -128,9 +131,9 @@ impl DatasetArgs {
         spec.background = self.background;
         spec.empty_fraction = self.empty_fraction;
         if let Some(c) = self.contacts_per_sample {
-            spec.contacts_per_sample = dataset::parse_contacts_range(&c)?;
+            spec.contacts_per_sample = dataset::parse_contacts_range(&c).map_err(&flag)?;
         }
-        spec.png = dataset::PngLevel::from_name(&self.png)?;
+        spec.png = dataset::PngLevel::from_name(&self.png).map_err(&flag)?;
         spec.workers = self.jobs.unwrap_or(spec.workers);
         spec.streams = self.streams.unwrap_or(spec.streams);
         Ok(spec)

@@ -1,7 +1,7 @@
 //! `geltip experiment`, `preview`, `stability`, `tradeoff` and `objects`: the jobs that
 //! write a directory of results and print their tables.
 
-use super::progress;
+use super::{progress, under_flags};
 use anyhow::Result;
 use clap::Args;
 use geltip::jobs::experiment::{self, Protocol};
@@ -74,6 +74,9 @@ pub struct PreviewArgs {
     no_pictures: bool,
 }
 
+/// The preview's options whose flags have other names.
+const PREVIEW_FLAGS: &[(&str, &str)] = &[("designs", "--sensors"), ("sweep_fovs", "--sweep-fov")];
+
 /// Previews the designs and prints their table and the sweep's best lens.
 pub fn preview(args: PreviewArgs) -> Result<()> {
     let designs = args
@@ -84,7 +87,7 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
     let fovs = if args.sweep_fov == "none" {
         vec![]
     } else {
-        preview::parse_range(&args.sweep_fov)?
+        preview::parse_range(&args.sweep_fov).map_err(under_flags(PREVIEW_FLAGS))?
     };
     let report = preview::run(
         &designs,
@@ -94,7 +97,8 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
         |name| {
             eprintln!("previewed {name}");
         },
-    )?;
+    )
+    .map_err(under_flags(PREVIEW_FLAGS))?;
     println!("{}", preview::table_markdown(&report.designs));
     if let Some((_, best)) = report.best_sweep() {
         println!("Best lens of the sweep: {}", best.lens);
@@ -152,7 +156,8 @@ pub fn stability(args: StabilityArgs) -> Result<()> {
     let report = stability::run(&sensor, &sweep, Some(&args.out), |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
-    })?;
+    })
+    .map_err(under_flags(&[("methods", "--method")]))?;
     bar.finish_and_clear();
     println!("{}", report.markdown());
     println!(

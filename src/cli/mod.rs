@@ -11,6 +11,7 @@ pub mod render;
 pub mod sensor;
 
 use clap::{Parser, Subcommand};
+use geltip::GeltipError;
 
 #[derive(Parser)]
 #[command(
@@ -103,4 +104,31 @@ pub enum Command {
     Tradeoff(jobs::TradeoffArgs),
     /// Write the seven built-in solids as OBJ meshes (the files in assets/objects/).
     Objects(jobs::ObjectsArgs),
+}
+
+/// Names a library error about one of a job's options by the flag that gives it: the
+/// option's own name as a flag (`depth_range` -> `--depth-range`), or the flag `renamed`
+/// pairs it with (`("designs", "--sensors")`). Other errors stay as they are.
+pub fn under_flags<'a>(
+    renamed: &'a [(&'a str, &'a str)],
+) -> impl Fn(GeltipError) -> anyhow::Error + 'a {
+    move |e| match e {
+        GeltipError::InvalidOption {
+            option,
+            value,
+            reason,
+        } => {
+            let flag = match renamed.iter().find(|(name, _)| *name == option) {
+                Some((_, flag)) => flag.to_string(),
+                None => format!("--{}", option.replace('_', "-")),
+            };
+            GeltipError::InvalidOption {
+                option: flag,
+                value,
+                reason,
+            }
+            .into()
+        }
+        other => other.into(),
+    }
 }

@@ -182,7 +182,7 @@ pub fn fov_sweep(base: &Sensor, fovs_deg: &[f64]) -> Result<Vec<Sensor>> {
 
 /// Parses `a:b:step` (degrees) into the list a, a+step, ..., b.
 pub fn parse_range(text: &str) -> Result<Vec<f64>> {
-    let bad = |why: &str| GeltipError::input(format!("--sweep-fov {text}"), why.to_string());
+    let bad = |why: &str| GeltipError::option_value("sweep_fovs", text, why);
     let parts: Vec<f64> = text
         .split(':')
         .map(|p| p.trim().parse::<f64>())
@@ -301,7 +301,7 @@ pub fn run(
     mut progress: impl FnMut(&str),
 ) -> Result<Report> {
     if designs.is_empty() {
-        return Err(GeltipError::input("--sensors", "no designs to preview"));
+        return Err(GeltipError::option("designs", "no designs to preview"));
     }
     let mut rows = Vec::new();
     for s in designs {

@@ -116,8 +116,8 @@ pub fn positions(sensor: &Sensor, sweep: &Sweep) -> Result<Vec<(f64, f64)>> {
         .iter()
         .find(|d| !d.is_finite() || **d <= 0.0 || **d > t)
     {
-        return Err(GeltipError::input(
-            "--depths",
+        return Err(GeltipError::option(
+            "depths",
             format!("every depth must be in (0, {t}] mm (the shell thickness), got {d}"),
         ));
     }
@@ -179,7 +179,7 @@ fn hidden_contacts(sensor: &Sensor, sweep: &Sweep) -> Vec<Press> {
 /// frames, and (without noise) the pairs. Contacts are scored against the pressed point.
 fn plan(sensor: &Sensor, sweep: &Sweep) -> Result<(Suite, Vec<Role>)> {
     if sweep.methods.is_empty() {
-        return Err(GeltipError::input("--method", "no methods to test"));
+        return Err(GeltipError::option("methods", "no methods to test"));
     }
     let places = positions(sensor, sweep)?;
     let hidden = hidden_contacts(sensor, sweep);

@@ -26,7 +26,7 @@ pub struct DirLock {
 
 impl DirLock {
     /// Takes the lock of `dir` (which must exist) for this process, or fails at once, naming
-    /// the run that holds it, with an error about `what` (e.g. `--out <dir>`).
+    /// the run that holds it, with an error about `what` (e.g. `out <dir>`).
     ///
     /// On a file system without advisory locks a warning is logged and the run goes on
     /// unguarded.
@@ -237,12 +237,12 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("geltip-lock-test-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
         fs::create_dir_all(&dir).unwrap();
-        let first = DirLock::acquire(&dir, "--out d").unwrap();
+        let first = DirLock::acquire(&dir, "out d").unwrap();
         assert!(DirLock::holder(&dir).unwrap().is_some());
-        let e = DirLock::acquire(&dir, "--out d").unwrap_err().to_string();
+        let e = DirLock::acquire(&dir, "out d").unwrap_err().to_string();
         let me = format!("pid {} on ", std::process::id());
         assert!(
-            e.starts_with("--out d: is being written by another run (") && e.contains(&me),
+            e.starts_with("out d: is being written by another run (") && e.contains(&me),
             "{e}"
         );
         drop(first);
@@ -255,7 +255,7 @@ mod tests {
         )
         .unwrap();
         assert!(DirLock::holder(&dir).unwrap().is_none());
-        let again = DirLock::acquire(&dir, "--out d").unwrap();
+        let again = DirLock::acquire(&dir, "out d").unwrap();
         let text = fs::read_to_string(dir.join(LOCK_FILE)).unwrap();
         assert!(text.starts_with(&me), "{text}");
         drop(again);

@@ -21,7 +21,7 @@ impl Shard {
 
     /// Parses `i/n` (0 <= i < n).
     pub fn parse(text: &str) -> Result<Shard> {
-        let bad = |reason: &str| GeltipError::input(format!("--shard {text}"), reason.to_string());
+        let bad = |reason: &str| GeltipError::option_value("shard", text, reason);
         let (i, n) = text
             .split_once('/')
             .ok_or_else(|| bad("expected <index>/<count>, e.g. 0/4"))?;
@@ -54,8 +54,7 @@ impl Shard {
 
 /// Parses `a..b` (mm): a press-depth range.
 pub fn parse_depth_range(text: &str) -> Result<(f64, f64)> {
-    let bad =
-        |reason: &str| GeltipError::input(format!("--depth-range {text}"), reason.to_string());
+    let bad = |reason: &str| GeltipError::option_value("depth_range", text, reason);
     let (a, b) = text
         .split_once("..")
         .ok_or_else(|| bad("expected <min>..<max> in mm, e.g. 0.2..1.5"))?;
@@ -105,10 +104,7 @@ impl PngLevel {
             .into_iter()
             .find(|l| l.name() == name)
             .ok_or_else(|| {
-                GeltipError::input(
-                    format!("--png {name}"),
-                    "expected none, fast, default or best",
-                )
+                GeltipError::option_value("png", name, "expected none, fast, default or best")
             })
     }
 
@@ -192,57 +188,60 @@ impl Spec {
         }
     }
 
-    /// Refuses options no set can be made with, naming the option.
+    /// Refuses options no set can be made with, naming the option (its field here).
     pub(super) fn check(&self) -> Result<()> {
         if self.count == 0 {
-            return Err(GeltipError::input("--count", "must be at least 1, got 0"));
+            return Err(GeltipError::option("count", "must be at least 1, got 0"));
         }
         if !(1..=MAX_STREAMS).contains(&self.streams) {
-            return Err(GeltipError::input(
-                "--streams",
+            return Err(GeltipError::option(
+                "streams",
                 format!("must lie in 1..={MAX_STREAMS}, got {}", self.streams),
             ));
         }
         if self.shard.count == 0 || self.shard.index >= self.shard.count {
-            return Err(GeltipError::input(
-                format!("--shard {}/{}", self.shard.index, self.shard.count),
+            return Err(GeltipError::option_value(
+                "shard",
+                format!("{}/{}", self.shard.index, self.shard.count),
                 "the shard index must be below the shard count",
             ));
         }
         let (a, b) = self.depth_range;
         if !(a.is_finite() && b.is_finite()) || a < 0.0 || b < a {
-            return Err(GeltipError::input(
-                format!("--depth-range {a}..{b}"),
+            return Err(GeltipError::option_value(
+                "depth_range",
+                format!("{a}..{b}"),
                 "needs 0 <= min <= max, finite, in mm",
             ));
         }
         if self.objects.is_empty() {
-            return Err(GeltipError::input("--objects", "the list is empty"));
+            return Err(GeltipError::option("objects", "the list is empty"));
         }
         let e = self.empty_fraction;
         if !(0.0..1.0).contains(&e) {
-            return Err(GeltipError::input(
-                "--empty-fraction",
+            return Err(GeltipError::option(
+                "empty_fraction",
                 format!("must be a number in [0, 1), got {e}"),
             ));
         }
         let (a, b) = self.contacts_per_sample;
         if a < 1 || b < a || b > MAX_CONTACTS_PER_SAMPLE {
-            return Err(GeltipError::input(
-                format!("--contacts-per-sample {a}..{b}"),
+            return Err(GeltipError::option_value(
+                "contacts_per_sample",
+                format!("{a}..{b}"),
                 format!("needs 1 <= min <= max <= {MAX_CONTACTS_PER_SAMPLE}"),
             ));
         }
         let noise = self.noise.rgb();
         for (what, v, max) in [
-            ("--noise", noise[0], 255.0),
-            ("--noise", noise[1], 255.0),
-            ("--noise", noise[2], 255.0),
-            ("--light-jitter", self.light_jitter, 1.0),
-            ("--paint-jitter", self.paint_jitter, 1.0),
+            ("noise", noise[0], 255.0),
+            ("noise", noise[1], 255.0),
+            ("noise", noise[2], 255.0),
+            ("light_jitter", self.light_jitter, 1.0),
+            ("paint_jitter", self.paint_jitter, 1.0),
         ] {
             if !v.is_finite() || v < 0.0 || v >= max {
-                return Err(GeltipError::input(
+                return Err(GeltipError::option(
                     what,
                     format!("must be a number in [0, {max}), got {v}"),
                 ));
@@ -299,11 +298,12 @@ impl Spec {
 /// Most contacts one sample may hold.
 pub const MAX_CONTACTS_PER_SAMPLE: u32 = 8;
 
-/// Parses `--contacts-per-sample`: `n` or `min..max`.
+/// Parses a count of contacts per sample: `n` or `min..max`.
 pub fn parse_contacts_range(text: &str) -> Result<(u32, u32)> {
     let bad = || {
-        GeltipError::input(
-            format!("--contacts-per-sample {text}"),
+        GeltipError::option_value(
+            "contacts_per_sample",
+            text,
             "expected a count n or a range min..max, e.g. 1..3",
         )
     };
@@ -357,7 +357,10 @@ mod tests {
         assert_eq!(Shard::parse("1/3").unwrap(), Shard { index: 1, count: 3 });
         for bad in ["3/3", "1/0", "x/2", "1", "-1/2"] {
             let e = Shard::parse(bad).unwrap_err().to_string();
-            assert!(e.contains("--shard") && !e.contains('\n'), "{e}");
+            assert!(
+                e.starts_with(&format!("shard {bad}: ")) && !e.contains('\n'),
+                "{e}"
+            );
         }
         assert_eq!(parse_depth_range("0.5..1.5").unwrap(), (0.5, 1.5));
         assert_eq!(parse_contacts_range("1..3").unwrap(), (1, 3));
@@ -365,7 +368,7 @@ mod tests {
         for bad in ["x", "1..", "-1..2", "1.5..2"] {
             let e = parse_contacts_range(bad).unwrap_err().to_string();
             assert!(
-                e.starts_with("--contacts-per-sample") && !e.contains('\n'),
+                e.starts_with(&format!("contacts_per_sample {bad}: ")) && !e.contains('\n'),
                 "{e}"
             );
         }

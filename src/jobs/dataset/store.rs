@@ -32,9 +32,8 @@ impl<'a> SetDir<'a> {
         spec: &Spec,
         options: &Value,
     ) -> Result<(SetDir<'a>, BTreeMap<u64, String>)> {
-        let what = format!("--out {}", dir.display());
         fs::create_dir_all(dir).map_err(|e| GeltipError::io(dir, e))?;
-        let lock = DirLock::acquire(dir, &what)?;
+        let lock = lock(dir, "out")?;
         let wanted = manifest(spec, options);
         match read_manifest(dir)? {
             Some(old) => {
@@ -43,8 +42,9 @@ impl<'a> SetDir<'a> {
                     diff.push("shard".into());
                 }
                 if !diff.is_empty() {
-                    return Err(GeltipError::input(
-                        what,
+                    return Err(GeltipError::option_value(
+                        "out",
+                        dir.display(),
                         format!(
                             "holds a set made with different options ({}); use another directory",
                             diff.join(", ")
@@ -70,8 +70,9 @@ impl<'a> SetDir<'a> {
         complete.retain(|k, _| range.contains(k));
         let expected = range.end - range.start;
         if complete.len() as u64 != expected {
-            return Err(GeltipError::input(
-                format!("--out {}", self.dir.display()),
+            return Err(GeltipError::option_value(
+                "out",
+                self.dir.display(),
                 format!(
                     "{} of {} samples complete after the run",
                     complete.len(),
@@ -81,6 +82,18 @@ impl<'a> SetDir<'a> {
         }
         write_labels(self.dir, &complete)
     }
+}
+
+/// `dir`'s lock, for a run or merge writing there; another run's hold on it is an error
+/// about the option `option` that named the directory.
+fn lock(dir: &Path, option: &str) -> Result<DirLock> {
+    let what = format!("{option} {}", dir.display());
+    DirLock::acquire(dir, &what).map_err(|e| match e {
+        GeltipError::InvalidInput { reason, .. } => {
+            GeltipError::option_value(option, dir.display(), reason)
+        }
+        other => other,
+    })
 }
 
 /// A set directory's manifest as JSON.
@@ -183,11 +196,12 @@ fn manifest(spec: &Spec, options: &Value) -> Value {
 /// Joins the shard directories of one set into `out`: checks that they hold the shards
 /// 0..n of the same options, each complete and none being written, links (or copies) their
 /// files into `out` and writes one `dataset.json` and one `labels.jsonl` sorted by index,
-/// as an unsharded run would. Returns the number of samples.
+/// as an unsharded run would. Returns the number of samples. Errors name the target `out`
+/// and the list `shards`, or the shard directory they are about.
 pub fn merge(out: &Path, shards: &[PathBuf], command: &[String]) -> Result<u64> {
     if shards.is_empty() {
-        return Err(GeltipError::input(
-            "--merge",
+        return Err(GeltipError::option(
+            "shards",
             "name the shard directories to join",
         ));
     }
@@ -205,13 +219,13 @@ pub fn merge(out: &Path, shards: &[PathBuf], command: &[String]) -> Result<u64> 
         "shard_range": [0, count],
         "command": command,
     });
-    let what = format!("--merge {}", out.display());
     fs::create_dir_all(out).map_err(|e| GeltipError::io(out, e))?;
-    let _lock = DirLock::acquire(out, &what)?;
+    let _lock = lock(out, "out")?;
     if let Some(old) = read_manifest(out)? {
         if old["options"] != wanted["options"] || old["shard"] != wanted["shard"] {
-            return Err(GeltipError::input(
-                what,
+            return Err(GeltipError::option_value(
+                "out",
+                out.display(),
                 "already holds a different set; use another directory",
             ));
         }
@@ -338,8 +352,8 @@ impl ShardSet {
                 .filter(|i| !self.seen.contains_key(i))
                 .map(|i| format!("{i}/{n}"))
                 .collect();
-            return Err(GeltipError::input(
-                "--merge",
+            return Err(GeltipError::option(
+                "shards",
                 format!("missing shards {}", missing.join(", ")),
             ));
         }
