@@ -397,6 +397,12 @@ fn bad_input_gives_one_line_errors() {
     assert!(e.contains("object 'teapot'"), "{e}");
     let e = with(&["--count", "5", "--depth-range", "2..1"]);
     assert!(e.contains("--depth-range"), "{e}");
+    // A range deeper than the objects can press names the range, not a contact's depth.
+    let e = with(&["--count", "5", "--depth-range", "0.2..1e9"]);
+    assert!(
+        e.starts_with("error: --depth-range 0.2..1000000000: the ") && e.contains("only up to"),
+        "{e}"
+    );
     for streams in ["0", "5"] {
         let e = with(&["--count", "5", "--streams", streams]);
         assert!(e.contains("--streams: must lie in 1..=4"), "{e}");
@@ -459,6 +465,8 @@ fn library_errors_name_the_options_not_flags() {
     assert_eq!(error(&|s| s.count = 0), "count: must be at least 1, got 0");
     let e = error(&|s| s.depth_range = (2.0, 1.0));
     assert!(e.starts_with("depth_range 2..1: needs 0 <= min"), "{e}");
+    let e = error(&|s| s.depth_range = (0.2, 1e9));
+    assert!(e.starts_with("depth_range 0.2..1000000000: the "), "{e}");
     let e = error(&|s| s.empty_fraction = 1.0);
     assert!(e.starts_with("empty_fraction: "), "{e}");
     let e = error(&|s| s.contacts_per_sample = (0, 2));

@@ -47,7 +47,7 @@ pub use spec::{
 };
 pub use store::{merge, LABELS, MANIFEST};
 
-use crate::error::Result;
+use crate::error::{GeltipError, Result};
 use crate::render::background::load_background;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -103,10 +103,17 @@ pub struct Progress {
 pub fn run(spec: &Spec, out: Option<&Path>, mut progress: impl FnMut(Progress)) -> Result<Report> {
     spec.check()?;
     let objects = load_objects(&spec.objects)?;
-    // Refuse an object that cannot be pressed as deep as asked before any work.
+    // Refuse an object that cannot be pressed as deep as asked before any work: the depth
+    // is the range's, so the error names the range.
     for o in &objects {
         let c = make_contact(o.clone(), 0.0, 0.0, 0.0, spec.depth_range.1);
-        c.pose(&spec.sensor)?;
+        c.pose(&spec.sensor).map_err(|e| match e {
+            GeltipError::InvalidContact { field, reason } if field == "depth" => {
+                let (a, b) = spec.depth_range;
+                GeltipError::option_value("depth_range", format!("{a}..{b}"), reason)
+            }
+            other => other,
+        })?;
     }
     let background = spec
         .background
