@@ -109,41 +109,8 @@ pub fn fit(
     circle: &ImageCircle,
     path: &Path,
 ) -> Result<ContactFit> {
-    let known = read(path)?;
+    let (presses, changes) = known_frames(sensor, empty, path)?;
     let (w, h) = (empty.mean.width, empty.mean.height);
-    let mut objects = ObjectCache::default();
-    let mut presses: Vec<Press> = Vec::with_capacity(known.len());
-    let mut changes: Vec<Vec<f64>> = Vec::with_capacity(known.len());
-    for (i, k) in known.iter().enumerate() {
-        let img = load_rgb(&k.image)?;
-        if img.dimensions() != (w, h) {
-            return Err(GeltipError::InvalidImage {
-                path: k.image.clone(),
-                reason: format!(
-                    "is {}x{} but the empty frames are {w}x{h}",
-                    img.width(),
-                    img.height()
-                ),
-            });
-        }
-        let press = k.spec.press(&mut objects).map_err(|e| {
-            GeltipError::input(format!("{} line {}", path.display(), i + 1), e.to_string())
-        })?;
-        press.pose(sensor).map_err(|e| {
-            GeltipError::input(
-                format!("{} contact {}", path.display(), i + 1),
-                e.to_string(),
-            )
-        })?;
-        presses.push(press);
-        changes.push(
-            img.as_raw()
-                .iter()
-                .zip(empty.mean.pixels.iter().flatten())
-                .map(|(&v, &e)| v as f64 - e)
-                .collect(),
-        );
-    }
     let inside: Vec<usize> = (0..(w * h) as usize)
         .filter(|&i| circle.contains(i as u32 % w, i as u32 / w, 3.0))
         .collect();
@@ -205,6 +172,50 @@ pub fn fit(
         rms_after: (2.0 * fit.cost / fit.residuals as f64).sqrt(),
         renders: renders.into_inner().unwrap(),
     })
+}
+
+/// Each known frame's press and its change from the empty frames' mean (RGB, 8-bit levels).
+type KnownFrames = (Vec<Press>, Vec<Vec<f64>>);
+
+/// Reads the frames the contacts file at `path` lists: each press, checked on `sensor`'s
+/// finger, and each frame's change from `empty`'s mean.
+fn known_frames(sensor: &Sensor, empty: &EmptyFrames, path: &Path) -> Result<KnownFrames> {
+    let known = read(path)?;
+    let (w, h) = (empty.mean.width, empty.mean.height);
+    let mut objects = ObjectCache::default();
+    let mut presses: Vec<Press> = Vec::with_capacity(known.len());
+    let mut changes: Vec<Vec<f64>> = Vec::with_capacity(known.len());
+    for (i, k) in known.iter().enumerate() {
+        let img = load_rgb(&k.image)?;
+        if img.dimensions() != (w, h) {
+            return Err(GeltipError::InvalidImage {
+                path: k.image.clone(),
+                reason: format!(
+                    "is {}x{} but the empty frames are {w}x{h}",
+                    img.width(),
+                    img.height()
+                ),
+            });
+        }
+        let press = k.spec.press(&mut objects).map_err(|e| {
+            GeltipError::input(format!("{} line {}", path.display(), i + 1), e.to_string())
+        })?;
+        press.pose(sensor).map_err(|e| {
+            GeltipError::input(
+                format!("{} contact {}", path.display(), i + 1),
+                e.to_string(),
+            )
+        })?;
+        presses.push(press);
+        changes.push(
+            img.as_raw()
+                .iter()
+                .zip(empty.mean.pixels.iter().flatten())
+                .map(|(&v, &e)| v as f64 - e)
+                .collect(),
+        );
+    }
+    Ok((presses, changes))
 }
 
 /// Each press rendered with `config`, less the rendered empty finger (RGB, 8-bit levels).

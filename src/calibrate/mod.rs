@@ -110,66 +110,21 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
     let circle = circle::find(&frames.mean)?;
     let lensed = with_lens(&options.start, &frames, &circle)?;
     progress("fitting the light");
-    let counts: Vec<usize> = if options.leds == 0 {
-        AUTO_LEDS.collect()
-    } else {
-        vec![options.leds]
-    };
-    let models: Vec<Model> = counts
-        .iter()
-        .map(|&leds| Model {
-            start: lensed.clone(),
-            leds,
-        })
-        .collect();
-    let fine = sample(&lensed, &frames, &circle, options.samples);
-    let coarse = sample(&lensed, &frames, &circle, (options.samples / 5).max(500));
-    let most = models.iter().map(Model::len).max().unwrap_or(0);
-    if coarse.len() < 4 * most {
-        return Err(GeltipError::InvalidImage {
-            path: frames.mean.path.clone(),
-            reason: format!(
-                "the image circle holds {} usable pixels, too few to fit {most} values",
-                fine.len(),
-            ),
-        });
-    }
-    let rotations: Vec<f64> = (0..options.starts.max(1))
-        .map(|i| 360.0 * i as f64 / options.starts.max(1) as f64)
-        .collect();
-    let fitted = fit::fit_empty(&models, &coarse, &fine, &rotations, 200);
+    let fitted = fit_light(options, &lensed, &frames, &circle)?;
     let model = &fitted.model;
     let mut config = model.config(&fitted.params);
     let mut values = lens_values(&model.start, &circle);
-    let errors = fitted.fit.standard_errors();
-    for ((name, value), std_error) in model::names(model.leds)
-        .into_iter()
-        .zip(&fitted.params)
-        .zip(errors)
-    {
-        values.push(Value {
-            name,
-            value: *value,
-            std_error,
-        });
-    }
+    values.extend(light_values(&fitted));
     let mut unconstrained = unconstrained_values(&values);
     unconstrained.push(
         "paint.colour, paint.diffuse: an empty frame shows the LEDs' light times the paint's; \
          the product is fitted as the LEDs' colours"
             .to_string(),
     );
-    let inside = |x: u32, y: u32| circle.contains(x, y, 3.0);
-    match frames.noise(inside) {
-        Some(noise) => {
+    match noise_values(&frames, &circle) {
+        Some((noise, noise_values)) => {
             config.render.noise = Noise::Rgb(noise);
-            for (c, sigma) in noise.iter().enumerate() {
-                values.push(Value {
-                    name: format!("render.noise[{c}]"),
-                    value: *sigma,
-                    std_error: sigma / (2.0 * (frames.count as f64 - 1.0)).sqrt(),
-                });
-            }
+            values.extend(noise_values);
         }
         None => unconstrained.push(
             "render.noise: one empty frame shows no noise; give several empty frames".to_string(),
@@ -186,7 +141,8 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
         }
         None => {
             unconstrained.push(
-                "elastomer.blend_mm, elastomer.drape_mm, elastomer.bulge: empty frames show no imprint; give frames with known contacts"
+                "elastomer.blend_mm, elastomer.drape_mm, elastomer.bulge: empty frames show no \
+                 imprint; give frames with known contacts"
                     .to_string(),
             );
             None
@@ -213,6 +169,77 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
         starts: fitted.starts,
         contacts,
     })
+}
+
+/// The light fitted to the empty frames' pixels inside the circle: every LED count asked
+/// for (`options.leds`, or [`AUTO_LEDS`]) from `options.starts` rotations, on a coarse
+/// sample and then a fine one, from the `lensed` sensor.
+fn fit_light(
+    options: &Options,
+    lensed: &Sensor,
+    frames: &EmptyFrames,
+    circle: &ImageCircle,
+) -> Result<fit::EmptyFit> {
+    let counts: Vec<usize> = if options.leds == 0 {
+        AUTO_LEDS.collect()
+    } else {
+        vec![options.leds]
+    };
+    let models: Vec<Model> = counts
+        .iter()
+        .map(|&leds| Model {
+            start: lensed.clone(),
+            leds,
+        })
+        .collect();
+    let fine = sample(lensed, frames, circle, options.samples);
+    let coarse = sample(lensed, frames, circle, (options.samples / 5).max(500));
+    let most = models.iter().map(Model::len).max().unwrap_or(0);
+    if coarse.len() < 4 * most {
+        return Err(GeltipError::InvalidImage {
+            path: frames.mean.path.clone(),
+            reason: format!(
+                "the image circle holds {} usable pixels, too few to fit {most} values",
+                fine.len(),
+            ),
+        });
+    }
+    let rotations: Vec<f64> = (0..options.starts.max(1))
+        .map(|i| 360.0 * i as f64 / options.starts.max(1) as f64)
+        .collect();
+    Ok(fit::fit_empty(&models, &coarse, &fine, &rotations, 200))
+}
+
+/// The light's fitted values, named as the model names them, with their standard errors.
+fn light_values(fitted: &fit::EmptyFit) -> Vec<Value> {
+    let errors = fitted.fit.standard_errors();
+    model::names(fitted.model.leds)
+        .into_iter()
+        .zip(&fitted.params)
+        .zip(errors)
+        .map(|((name, value), std_error)| Value {
+            name,
+            value: *value,
+            std_error,
+        })
+        .collect()
+}
+
+/// The noise of each colour channel inside the circle and its values (`render.noise[c]`),
+/// when there are several empty frames to measure it from.
+fn noise_values(frames: &EmptyFrames, circle: &ImageCircle) -> Option<([f64; 3], Vec<Value>)> {
+    let inside = |x: u32, y: u32| circle.contains(x, y, 3.0);
+    let noise = frames.noise(inside)?;
+    let values = noise
+        .iter()
+        .enumerate()
+        .map(|(c, sigma)| Value {
+            name: format!("render.noise[{c}]"),
+            value: *sigma,
+            std_error: sigma / (2.0 * (frames.count as f64 - 1.0)).sqrt(),
+        })
+        .collect();
+    Some((noise, values))
 }
 
 /// The start sensor with the frame's size and the lens the circle implies: the principal

@@ -134,28 +134,7 @@ where
             fresh_jacobian = false;
         }
         iterations += 1;
-        // Parameters held at a bound by the descent direction stay there this step (their
-        // rows and columns are taken out), so that the others' step is not bent by clamping.
-        let held: Vec<bool> = (0..n)
-            .map(|i| {
-                (params[i] <= bounds[i].lo && g[i] < 0.0)
-                    || (params[i] >= bounds[i].hi && g[i] > 0.0)
-            })
-            .collect();
-        let mut a = jtj.clone();
-        let mut rhs = g.clone();
-        for i in 0..n {
-            a[i * n + i] += lambda * jtj[i * n + i].max(1e-12);
-            if held[i] {
-                for k in 0..n {
-                    a[i * n + k] = 0.0;
-                    a[k * n + i] = 0.0;
-                }
-                a[i * n + i] = 1.0;
-                rhs[i] = 0.0;
-            }
-        }
-        let Some(step) = solve_dense(&a, &rhs, n) else {
+        let Some(step) = damped_step(&jtj, &g, &params, bounds, lambda) else {
             lambda *= 10.0;
             continue;
         };
@@ -194,6 +173,39 @@ where
         jtj,
         residuals: m,
     }
+}
+
+/// One step of Levenberg-Marquardt from `params`: the normal equations `jtj`, `g` with their
+/// diagonal damped by `lambda`, solved; `None` when singular. Parameters held at a bound by
+/// the descent direction stay there this step (their rows and columns are taken out), so
+/// that the others' step is not bent by clamping.
+fn damped_step(
+    jtj: &[f64],
+    g: &[f64],
+    params: &[f64],
+    bounds: &[Bound],
+    lambda: f64,
+) -> Option<Vec<f64>> {
+    let n = params.len();
+    let held: Vec<bool> = (0..n)
+        .map(|i| {
+            (params[i] <= bounds[i].lo && g[i] < 0.0) || (params[i] >= bounds[i].hi && g[i] > 0.0)
+        })
+        .collect();
+    let mut a = jtj.to_vec();
+    let mut rhs = g.to_vec();
+    for i in 0..n {
+        a[i * n + i] += lambda * jtj[i * n + i].max(1e-12);
+        if held[i] {
+            for k in 0..n {
+                a[i * n + k] = 0.0;
+                a[k * n + i] = 0.0;
+            }
+            a[i * n + i] = 1.0;
+            rhs[i] = 0.0;
+        }
+    }
+    solve_dense(&a, &rhs, n)
 }
 
 fn half_squares(r: &[f64]) -> f64 {

@@ -224,6 +224,24 @@ impl SensorConfig {
 
     /// Checks every field against what a real sensor can be; the error names the field.
     pub fn validate(&self) -> Result<()> {
+        self.validate_finger()?;
+        self.validate_image()?;
+        self.validate_lens()?;
+        self.validate_rendering()?;
+        // Last: inverting the projection needs every field above sound.
+        if let Some(theta) = self.lens().first_non_increasing_theta() {
+            return Err(GeltipError::config(
+                "lens.k",
+                format!(
+                    "the projection stops increasing at {:.2} degrees off axis, inside the field of view; it cannot be inverted",
+                    theta.to_degrees()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn validate_finger(&self) -> Result<()> {
         let f = &self.finger;
         finger_size("finger.radius_mm", f.radius_mm)?;
         finger_size("finger.cylinder_length_mm", f.cylinder_length_mm)?;
@@ -237,6 +255,10 @@ impl SensorConfig {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    fn validate_image(&self) -> Result<()> {
         let img = &self.image;
         for (field, v) in [("image.width", img.width), ("image.height", img.height)] {
             if v == 0 || v > MAX_IMAGE_SIDE {
@@ -246,7 +268,12 @@ impl SensorConfig {
                 ));
             }
         }
-        let l = &self.lens;
+        Ok(())
+    }
+
+    /// The lens's own fields (whether its projection can be inverted is checked last).
+    fn validate_lens(&self) -> Result<()> {
+        let (l, img) = (&self.lens, &self.image);
         finite_positive("lens.focal_px", l.focal_px)?;
         finite_positive("lens.fov_deg", l.fov_deg)?;
         if l.fov_deg >= 360.0 {
@@ -292,16 +319,6 @@ impl SensorConfig {
                 format!(
                     "only the kannala-brandt model uses k, but the model is {}",
                     l.model.name()
-                ),
-            ));
-        }
-        self.validate_rendering()?;
-        if let Some(theta) = self.lens().first_non_increasing_theta() {
-            return Err(GeltipError::config(
-                "lens.k",
-                format!(
-                    "the projection stops increasing at {:.2} degrees off axis, inside the field of view; it cannot be inverted",
-                    theta.to_degrees()
                 ),
             ));
         }
