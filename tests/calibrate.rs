@@ -346,68 +346,35 @@ fn every_command_takes_a_calibrated_sensor_file() -> Result<()> {
     c.render.noise = Noise::Rgb([1.0, 2.0, 0.5]);
     let path = dir.join("sensor.toml");
     std::fs::write(&path, geltip::jobs::calibrate::sensor_toml(&c)?)?;
-    let sensor = path.to_str().unwrap();
-    let out = |name: &str| dir.join(name).to_str().unwrap().to_string();
-    let runs: Vec<Vec<String>> = vec![
-        vec![
-            "render",
-            "--sensor",
-            sensor,
-            "--object",
-            "sphere",
-            "--at",
-            "rotation=30",
-            "--depth",
-            "1",
-            "-o",
-            &out("sphere.png"),
-        ],
-        vec![
-            "dataset",
-            "--sensor",
-            sensor,
-            "--count",
-            "3",
-            "--seed",
-            "1",
-            "--out",
-            &out("set"),
-        ],
-        vec!["preview", "--sensors", sensor, "--out", &out("preview")],
-        vec![
+    // Each command's words (SENSOR: the file), then the path it writes.
+    let runs = [
+        (
+            "render --sensor SENSOR --object sphere --at rotation=30 --depth 1 -o",
+            "sphere.png",
+        ),
+        ("dataset --sensor SENSOR --count 3 --seed 1 --out", "set"),
+        ("preview --sensors SENSOR --out", "preview"),
+        (
+            "stability --sensor SENSOR --positions 3 --azimuths 1 --out",
             "stability",
-            "--sensor",
-            sensor,
-            "--positions",
-            "3",
-            "--azimuths",
-            "1",
-            "--out",
-            &out("stability"),
-        ],
-        vec![
+        ),
+        (
+            "evaluate --suite paper --sensor SENSOR --method surface --out",
             "evaluate",
-            "--suite",
-            "paper",
-            "--sensor",
-            sensor,
-            "--method",
-            "surface",
-            "--out",
-            &out("evaluate"),
-        ],
-    ]
-    .into_iter()
-    .map(|v| v.into_iter().map(String::from).collect())
-    .collect();
-    for args in runs {
-        let done = Command::new(env!("CARGO_BIN_EXE_geltip"))
-            .args(&args)
-            .output()?;
+        ),
+    ];
+    for (words, written) in runs {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_geltip"));
+        for word in words.split_whitespace() {
+            match word {
+                "SENSOR" => command.arg(&path),
+                _ => command.arg(word),
+            };
+        }
+        let done = command.arg(dir.join(written)).output()?;
         assert!(
             done.status.success(),
-            "geltip {}: {}",
-            args[0],
+            "geltip {words}: {}",
             String::from_utf8_lossy(&done.stderr)
         );
     }

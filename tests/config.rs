@@ -174,9 +174,9 @@ fn config_round_trips_through_toml() {
 }
 
 /// A sensor file with its LEDs listed (`[[leds]]`), its light (`[light]`), a coloured paint
-/// and noise per channel: loaded, checked field by field, written back the same.
+/// and noise per channel: loaded and written back the same.
 #[test]
-fn listed_leds_light_paint_colour_and_channel_noise() {
+fn listed_leds_light_paint_colour_and_channel_noise_load() {
     use geltip::sensor::{Leds, Noise};
     let text = paper_toml()
         + r#"
@@ -222,12 +222,21 @@ noise = [1.5, 2.0, 0.5]
     assert_eq!(s.config.render.noise, Noise::Rgb([1.5, 2.0, 0.5]));
     let again = toml::to_string(&s.config).unwrap();
     assert_eq!(Sensor::from_toml("again", &again).unwrap().config, s.config);
+}
 
-    // The ring of the presets resolves to its three LEDs, as before.
+/// A file that lists no LEDs lights the finger with the ring of three the presets describe,
+/// and the ambient light they set.
+#[test]
+fn a_ring_of_leds_resolves_to_its_three_leds() {
     let paper = Sensor::preset("paper").unwrap().lighting();
     assert_eq!(paper.leds.len(), 3);
     assert_eq!(paper.ambient.to_array(), [0.06; 3]);
+}
 
+/// Listed LEDs, light, paint colour and per-channel noise out of range or of the wrong shape
+/// are refused on one line naming the field.
+#[test]
+fn listed_leds_light_paint_colour_and_channel_noise_are_refused_by_field() {
     for (bad, field) in [
         (
             "[[leds]]\ncolour = [1.0, -0.1, 0.0]\nazimuth_deg = 0.0\n",

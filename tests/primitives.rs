@@ -325,7 +325,12 @@ fn rigid_poses_measure_depth_along_their_approach() {
         .pose_if_touching(&sensor)
         .unwrap_err();
     assert!(e.to_string().contains("has gone through"), "{e}");
-    // Bad approaches name the field.
+}
+
+/// An approach is three numbers with a direction, given with a pose: otherwise an error
+/// that names the field.
+#[test]
+fn bad_approaches_name_the_field() {
     let spec = |json: &str| -> geltip::Result<Hold> {
         serde_json::from_str::<geltip::scene::ContactSpec>(json)
             .unwrap()
