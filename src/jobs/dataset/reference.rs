@@ -31,8 +31,9 @@ pub(super) fn reference_image(
     }
 }
 
-/// The empty frame of the set in `dir`, rendered from its `dataset.json` (for sets written
-/// before sets held their `reference.png`).
+/// The empty frame of the set in `dir`, rendered from its `dataset.json`: for a set that
+/// holds no `reference.png` (one made by an older geltip, or whose file was removed), the
+/// manifest alone says how its empty frame looks.
 pub fn reference_of_set(dir: &Path) -> Result<RgbImage> {
     let path = dir.join(MANIFEST);
     let text = std::fs::read_to_string(&path).map_err(|e| GeltipError::io(&path, e))?;
