@@ -324,6 +324,87 @@ fn a_file_and_a_program_give_the_same_summary() {
     }
 }
 
+/// `--compare`: a second detector's report beside another run's; tables.md and the charts
+/// name both. A directory that is not an evaluate output is refused on one line.
+#[test]
+fn compare_sets_two_detectors_side_by_side() {
+    let set = mixed_set();
+    let set_arg = set.to_str().unwrap();
+    let oracle_file = predictions(set, "compare-oracle", oracle);
+    let blind_file = predictions(set, "compare-blind", |_| Vec::new());
+    let (first, second) = (scratch("compare-first"), scratch("compare-second"));
+    let ok = |args: &[&str]| {
+        let run = geltip(args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    };
+    ok(&[
+        "evaluate",
+        "--dataset",
+        set_arg,
+        "--predictions",
+        oracle_file.to_str().unwrap(),
+        "--name",
+        "the-oracle",
+        "--out",
+        first.to_str().unwrap(),
+    ]);
+    ok(&[
+        "evaluate",
+        "--dataset",
+        set_arg,
+        "--predictions",
+        blind_file.to_str().unwrap(),
+        "--name",
+        "the-blind-one",
+        "--out",
+        second.to_str().unwrap(),
+        "--compare",
+        first.to_str().unwrap(),
+    ]);
+    let read = |name: &str| std::fs::read_to_string(second.join(name)).unwrap();
+    let tables = read("tables.md");
+    assert!(
+        tables.contains("| | `the-blind-one` | `the-oracle` |"),
+        "{tables}"
+    );
+    assert!(tables.contains("`the-oracle`: found"), "{tables}");
+    for chart in ["by_depth.svg", "by_region.svg", "precision_recall.svg"] {
+        let svg = read(chart);
+        assert!(
+            svg.contains("the-blind-one") && svg.contains("the-oracle"),
+            "{chart} names one detector"
+        );
+    }
+    // The compared run's own summary stays its own.
+    let summary = summary_without_run_fields(&second);
+    assert_eq!(summary["recall"], 0.0, "{summary}");
+
+    // Not an evaluate output: a set's directory (no summary.json), and a directory whose
+    // summary.json is some other file's.
+    let oracle_arg = oracle_file.to_str().unwrap();
+    refused(
+        "compare-a-set",
+        &["--predictions", oracle_arg, "--compare", set_arg],
+        "summary.json: ",
+    );
+    let foreign = scratch("foreign-summary");
+    std::fs::write(foreign.join("summary.json"), "{\"recall\": 1}\n").unwrap();
+    refused(
+        "compare-foreign",
+        &[
+            "--predictions",
+            oracle_arg,
+            "--compare",
+            foreign.to_str().unwrap(),
+        ],
+        "is this a geltip evaluate summary?",
+    );
+}
+
 /// Runs evaluate on the mixed set with `args`, expecting a one-line error holding `says`,
 /// and an output directory left without a file.
 fn refused(name: &str, args: &[&str], says: &str) {
