@@ -405,6 +405,21 @@ fn compare_sets_two_detectors_side_by_side() {
     );
 }
 
+/// The library refuses a sensor given with a set (the set holds its own), as the command
+/// line does, rather than ignoring it.
+#[test]
+fn a_sensor_given_with_a_dataset_is_refused() {
+    let sensor = Sensor::preset("paper").unwrap();
+    let e = evaluate::source(Some(mixed_set()), None, Some(&sensor))
+        .err()
+        .expect("a sensor with a set was accepted");
+    assert!(
+        e.to_string()
+            .starts_with("sensor: a dataset holds its own sensor"),
+        "{e}"
+    );
+}
+
 /// Runs evaluate on the mixed set with `args`, expecting a one-line error holding `says`,
 /// and an output directory left without a file.
 fn refused(name: &str, args: &[&str], says: &str) {

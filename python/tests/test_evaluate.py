@@ -133,5 +133,9 @@ def test_bad_arguments(mixed_set):
         geltip.evaluate("surface")
     with pytest.raises(geltip.InvalidArgumentError, match="name a sensor"):
         geltip.evaluate("surface", suite="paper")
+    # A set holds its own sensor: another one given with it is refused, not ignored.
+    with pytest.raises(geltip.InvalidArgumentError,
+                       match="^sensor: a dataset holds its own sensor"):
+        geltip.evaluate("surface", dataset=mixed_set, sensor="paper")
     with pytest.raises(geltip.InvalidArgumentError, match="gate_mm: must be a positive"):
         geltip.evaluate("surface", dataset=mixed_set, gate_mm=-1)

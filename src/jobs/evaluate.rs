@@ -28,12 +28,17 @@ pub fn suite(name: &str, sensor: &Sensor) -> Result<Suite> {
 }
 
 /// What to score on: a set's directory, or a suite's name with the sensor to render it for.
+/// A set holds its own sensor: a sensor given with one is refused, not ignored.
 pub fn source(
     dataset: Option<&Path>,
     suite_name: Option<&str>,
     sensor: Option<&Sensor>,
 ) -> Result<Source> {
     match (dataset, suite_name) {
+        (Some(_), None) if sensor.is_some() => Err(GeltipError::input(
+            "sensor",
+            "a dataset holds its own sensor; name a sensor only with a suite",
+        )),
         (Some(dir), None) => Ok(Source::Dataset(DatasetSource::open(
             dir,
             Target::ContactCentre,
