@@ -540,3 +540,52 @@ fn a_failing_detector_program_is_named_with_the_sample() {
         "its answer names sample 7",
     );
 }
+
+/// A compared summary.json as `--compare` reads it: the oracle's on the mixed set, changed
+/// by `edit`.
+fn compared_summary(name: &str, edit: impl Fn(&mut Value)) -> geltip::Result<Value> {
+    let set = mixed_set();
+    let mut summary = score(set, &predictions(set, name, oracle));
+    edit(&mut summary);
+    let dir = scratch(&format!("{name}-compared"));
+    std::fs::write(dir.join("summary.json"), summary.to_string()).unwrap();
+    geltip::evaluate::report::read_summary(&dir)
+}
+
+/// Regression (fuzz): a compared summary's shares outside [0, 1] and negative errors, which
+/// the tables and charts computed with (`inf%` in tables.md, an overflow drawing the
+/// charts), are refused naming the number.
+#[test]
+fn a_compared_summary_with_numbers_no_summary_holds_is_refused() {
+    assert!(compared_summary("compared-real", |_| {}).is_ok());
+    let refused = |name: &str, edit: &dyn Fn(&mut Value), says: &str| {
+        let e = compared_summary(name, edit).unwrap_err().to_string();
+        assert!(
+            e.contains(says) && e.ends_with("is this a geltip evaluate summary?"),
+            "{name}: {e}"
+        );
+    };
+    refused(
+        "compared-recall",
+        &|s| s["recall"] = json!(1e308),
+        "recall: 1e308 is not a share in [0, 1]",
+    );
+    refused(
+        "compared-group-recall",
+        &|s| {
+            let group = s["by_object"].as_object_mut().unwrap().values_mut().next();
+            group.unwrap()["recall"] = json!(-7.6e18);
+        },
+        ".recall: -7.6e18 is not a share in [0, 1]",
+    );
+    refused(
+        "compared-curve",
+        &|s| s["precision_recall"][0][1] = json!(2),
+        "precision_recall[0][1]: 2 is not a share",
+    );
+    refused(
+        "compared-error",
+        &|s| s["error_mm"]["p95"] = json!(-1),
+        "error_mm.p95: -1 is not an error",
+    );
+}

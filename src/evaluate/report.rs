@@ -207,7 +207,61 @@ pub fn read_summary(dir: &Path) -> Result<Value> {
             ));
         }
     }
+    summary_numbers(&v).map_err(|why| {
+        GeltipError::input(
+            path.display().to_string(),
+            format!("{why}; is this a geltip evaluate summary?"),
+        )
+    })?;
     Ok(v)
+}
+
+/// Refuses the numbers no summary holds, which the tables and charts would compute with:
+/// a share (recall, precision, average precision) outside [0, 1], a negative error.
+fn summary_numbers(v: &Value) -> std::result::Result<(), String> {
+    // Far from 1, in exponent form: no line of hundreds of digits.
+    let shown = |x: f64| match x.abs() >= 1e9 {
+        true => format!("{x:e}"),
+        false => format!("{x}"),
+    };
+    let share = |at: String, x: &Value| match x.as_f64() {
+        Some(x) if !(0.0..=1.0).contains(&x) => {
+            Err(format!("{at}: {} is not a share in [0, 1]", shown(x)))
+        }
+        _ => Ok(()),
+    };
+    let errors = |at: &str, e: &Value| {
+        for stat in ["mean", "median", "p95", "max"] {
+            if let Some(x) = e[stat].as_f64().filter(|x| *x < 0.0) {
+                return Err(format!(
+                    "{at}.{stat}: {} is not an error, which is >= 0",
+                    shown(x)
+                ));
+            }
+        }
+        Ok(())
+    };
+    share("recall".into(), &v["recall"])?;
+    share("average_precision".into(), &v["average_precision"])?;
+    errors("error_mm", &v["error_mm"])?;
+    errors("error_px", &v["error_px"])?;
+    for (i, point) in v["precision_recall"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .enumerate()
+    {
+        // [threshold, precision, recall]
+        share(format!("precision_recall[{i}][1]"), &point[1])?;
+        share(format!("precision_recall[{i}][2]"), &point[2])?;
+    }
+    for key in ["by_region", "by_depth", "by_object"] {
+        for (name, g) in v[key].as_object().into_iter().flatten() {
+            share(format!("{key}.{name}.recall"), &g["recall"])?;
+            errors(&format!("{key}.{name}.error_mm"), &g["error_mm"])?;
+        }
+    }
+    Ok(())
 }
 
 /// The files of an evaluation, in memory: (name, bytes).
