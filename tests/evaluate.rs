@@ -589,3 +589,27 @@ fn a_compared_summary_with_numbers_no_summary_holds_is_refused() {
         "error_mm.p95: -1 is not an error",
     );
 }
+
+/// Regression (fuzz): a group's error near the largest float made the error axis infinite,
+/// and drawing its ticks never ended.
+#[test]
+fn an_error_near_the_largest_float_charts_in_bounded_time() {
+    let summary = json!({"detector": "huge", "by_depth": {"1-1.5": {
+        "visible": 2, "detected": 1, "recall": 0.5,
+        "error_mm": {"mean": 0.1, "median": 0.1, "p95": f64::MAX, "max": f64::MAX},
+    }}});
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let order = ["1-1.5".to_string()];
+        let _ = tx.send(geltip::evaluate::charts::by_group(
+            &[summary],
+            "by_depth",
+            &order,
+        ));
+    });
+    let svg = rx
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("the chart is not drawn within a minute")
+        .unwrap();
+    assert!(svg.contains("<svg"), "{svg}");
+}

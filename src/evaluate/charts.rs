@@ -64,6 +64,9 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
         })
         .fold(0.5f64, f64::max)
         * 1.1;
+    // A finite axis: a p95 near the largest float would make it infinite, and its ticks
+    // endless.
+    let top_error = top_error.min(f64::MAX);
     let label = |x: &f64| {
         let i = x.round();
         match groups.get(i as usize) {
