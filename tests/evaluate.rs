@@ -613,3 +613,38 @@ fn an_error_near_the_largest_float_charts_in_bounded_time() {
         .unwrap();
     assert!(svg.contains("<svg"), "{svg}");
 }
+
+/// Regression (fuzz): a label's arc length far past the finger (read from a set's file)
+/// overflowed the failure map's pixels; it is drawn at the finger's end, as a false
+/// positive is.
+#[test]
+fn a_contact_far_past_the_finger_is_drawn_on_the_failure_map() {
+    use geltip::evaluate::{Evaluation, LabelledContact, SampleScore, SampleTruth, Scored};
+    let sensor = Sensor::preset("paper").unwrap();
+    let contact = |s_mm: f64| LabelledContact {
+        target: glam::DVec3::new(7.5, 0.0, 15.0),
+        pixel: Some(glam::DVec2::new(400.0, 240.0)),
+        visible: true,
+        object: "sphere".into(),
+        depth_mm: 1.0,
+        s_mm,
+        azimuth_deg: -1e300,
+        region: "side",
+    };
+    let eval = Evaluation {
+        detector: "blind".into(),
+        frames: vec![Scored {
+            truth: SampleTruth {
+                index: 0,
+                contacts: vec![contact(1e300), contact(-1e300)],
+            },
+            found: Vec::new(),
+            score: SampleScore {
+                missed: vec![0, 1],
+                ..SampleScore::default()
+            },
+        }],
+    };
+    let svg = geltip::evaluate::charts::failure_map(&eval, &sensor).unwrap();
+    assert!(svg.contains("missed (2)"), "{svg}");
+}

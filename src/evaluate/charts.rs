@@ -143,7 +143,9 @@ impl Marks {
                 if !c.visible {
                     continue;
                 }
-                let at = (c.azimuth_deg.rem_euclid(360.0), c.s_mm);
+                // On the drawn finger, as false positives are: labels read from a file may
+                // put a contact anywhere.
+                let at = (c.azimuth_deg.rem_euclid(360.0), c.s_mm.clamp(0.0, s_top));
                 match f.score.matches.iter().find(|m| m.contact == i) {
                     Some(m) if m.error_mm >= LARGE_ERROR_MM => marks.large.push(at),
                     Some(_) => marks.good.push(at),
