@@ -648,3 +648,43 @@ fn a_contact_far_past_the_finger_is_drawn_on_the_failure_map() {
     let svg = geltip::evaluate::charts::failure_map(&eval, &sensor).unwrap();
     assert!(svg.contains("missed (2)"), "{svg}");
 }
+
+/// A copy of the mixed set's manifest with `labels` as its labels.jsonl.
+fn set_with_labels(name: &str, labels: &str) -> PathBuf {
+    let dir = scratch(name);
+    std::fs::copy(mixed_set().join("dataset.json"), dir.join("dataset.json")).unwrap();
+    std::fs::write(dir.join("labels.jsonl"), labels).unwrap();
+    dir
+}
+
+/// Regression (fuzz): a set's labels that name a sample twice (it was scored twice, and
+/// another went unscored) or one outside the set are refused, naming the line.
+#[test]
+fn labels_naming_a_sample_twice_or_outside_the_set_are_refused() {
+    let text = std::fs::read_to_string(mixed_set().join("labels.jsonl")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let open = |name: &str, labels: Vec<String>| {
+        let dir = set_with_labels(name, &(labels.join("\n") + "\n"));
+        DatasetSource::open(&dir, Target::ContactCentre)
+            .err()
+            .map(|e| e.to_string())
+    };
+    let all: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    assert_eq!(open("labels-all", all.clone()), None);
+    let mut twice = all.clone();
+    twice[1] = twice[0].clone();
+    let e = open("labels-twice", twice).expect("a sample twice was accepted");
+    assert!(
+        e.ends_with("labels.jsonl: line 2: index: sample 0 again (first on line 1)"),
+        "{e}"
+    );
+    let mut outside = all;
+    let mut last: Value = serde_json::from_str(outside.last().unwrap()).unwrap();
+    last["index"] = json!(4294967295u64);
+    *outside.last_mut().unwrap() = last.to_string();
+    let e = open("labels-outside", outside).expect("a sample outside the set was accepted");
+    assert!(
+        e.ends_with("line 30: index: sample 4294967295 is not one of the set's samples 0..30"),
+        "{e}"
+    );
+}

@@ -14,6 +14,7 @@ use crate::render::{Frame, GroundTruth, Press};
 use crate::sensor::Sensor;
 use image::RgbImage;
 use serde_json::Value;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -120,9 +121,17 @@ impl DatasetSource {
         })?;
         let name = options["sensor"].as_str().unwrap_or("dataset sensor");
         let sensor = Arc::new(Sensor::from_config(name, config)?);
+        // The samples the set's labels are of: its shard's range, else its count.
+        let range = &manifest["shard_range"];
+        let samples = match (range[0].as_u64(), range[1].as_u64()) {
+            (Some(a), Some(b)) if b >= a => Some(a..b),
+            _ => options["count"].as_u64().map(|n| 0..n),
+        };
         let path = dir.join(LABELS);
         let text = std::fs::read_to_string(&path).map_err(|e| GeltipError::io(&path, e))?;
         let mut entries = Vec::new();
+        // Each sample's line, so that a sample named twice is refused, not scored twice.
+        let mut lines: BTreeMap<u64, usize> = BTreeMap::new();
         for (n, line) in text
             .lines()
             .enumerate()
@@ -134,17 +143,28 @@ impl DatasetSource {
             let index = v["index"]
                 .as_u64()
                 .ok_or_else(|| GeltipError::input(&at, "index: required, an integer >= 0"))?;
+            if let Some(r) = samples.as_ref().filter(|r| !r.contains(&index)) {
+                return Err(GeltipError::input(
+                    &at,
+                    format!(
+                        "index: sample {index} is not one of the set's samples {}..{}",
+                        r.start, r.end
+                    ),
+                ));
+            }
+            if let Some(first) = lines.insert(index, n + 1) {
+                return Err(GeltipError::input(
+                    &at,
+                    format!("index: sample {index} again (first on line {first})"),
+                ));
+            }
             let image = v["image"]
                 .as_str()
                 .ok_or_else(|| GeltipError::input(&at, "image: required, a file name"))?;
             let truth = SampleTruth::from_json(&sensor, index, &v, target, &at)?;
             entries.push((truth, dir.join(image)));
         }
-        let range = &manifest["shard_range"];
-        let expected = match (range[0].as_u64(), range[1].as_u64()) {
-            (Some(a), Some(b)) if b >= a => b - a,
-            _ => options["count"].as_u64().unwrap_or(entries.len() as u64),
-        };
+        let expected = samples.map_or(entries.len() as u64, |r| r.end - r.start);
         if entries.len() as u64 != expected {
             return Err(GeltipError::input(
                 dir.display().to_string(),
