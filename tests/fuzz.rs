@@ -1,6 +1,7 @@
 //! Fuzz tests of every parser a user feeds (sensor TOML, scene files, meshes, PNG frames,
-//! poses and places, a dataset's files on resume and merge, predictions, a calibration's
-//! contacts file and empty frames): structure-aware mutations of
+//! poses and places, a dataset's files on resume and merge, predictions, a set's labels and
+//! a compared summary as evaluate reads them, a calibration's contacts file and empty
+//! frames): structure-aware mutations of
 //! real inputs, each case refused with a one-line error or accepted with a sound value,
 //! never a panic or a hang. See `tests/fuzz/mod.rs`; `cargo bench --bench fuzz -- --cases N`
 //! runs longer. `GELTIP_FUZZ_CASES=N` sets every target's cases here.
@@ -128,6 +129,16 @@ fn calibrate_contacts_jsonl() {
 #[test]
 fn png_calibrate_empty_frame() {
     check("png calibrate empty frame");
+}
+
+#[test]
+fn evaluate_labels_jsonl() {
+    check("evaluate labels.jsonl");
+}
+
+#[test]
+fn evaluate_compare_summary_json() {
+    check("evaluate compare summary.json");
 }
 
 /// Every target in the table has a test above.

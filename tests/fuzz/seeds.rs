@@ -1,6 +1,7 @@
 //! Real valid inputs to start from: the presets, the scene files and meshes in the tree,
 //! glTF and GLB files made from those meshes, PNG frames, poses and places of real contacts,
-//! and the files of a dataset directory. Also the sensors and set directories the feeds use.
+//! the files of a dataset directory, and a real evaluate run's summary. Also the sensors and
+//! set directories the feeds use.
 
 use super::gltf_files::{glb_bytes, gltf_json};
 use geltip::jobs::dataset::{self, Shard, Spec};
@@ -354,4 +355,148 @@ pub fn detector_answers() -> Vec<Vec<u8>> {
         b"{\"sample\": 0, \"detections\": [{\"point\": [7.5, 0.0, 15.75]}]}".to_vec(),
         b"{\"detections\": []}".to_vec(),
     ]
+}
+
+/// The manifest of a whole set of `count` samples of the paper sensor: a real run's (an
+/// empty shard, which renders nothing) made whole.
+pub fn evaluate_manifest(count: u64) -> Vec<u8> {
+    static M: OnceLock<Vec<u8>> = OnceLock::new();
+    let real = M.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!(
+            "geltip-fuzz-evaluate-manifest-{}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut spec = empty_shard_spec(None);
+        spec.sensor_arg = "paper".into();
+        spec.sensor = paper().clone();
+        dataset::run(&spec, Some(&dir), |_| {}).expect("an empty shard");
+        let text = std::fs::read(dir.join(dataset::MANIFEST)).expect("its manifest");
+        let _ = std::fs::remove_dir_all(&dir);
+        text
+    });
+    let mut v: serde_json::Value = serde_json::from_slice(real).expect("a manifest");
+    v["options"]["count"] = count.into();
+    v["shard"] = serde_json::json!([0, 1]);
+    v["shard_range"] = serde_json::json!([0, count]);
+    v.to_string().into_bytes()
+}
+
+/// A label line of sample `k` in the scene form (`--contacts-per-sample`,
+/// `--empty-fraction`): `contacts` real contacts' labels (none: an empty frame).
+fn scene_label_line(k: u64, contacts: usize) -> String {
+    let one: serde_json::Value = serde_json::from_str(&label_line(k)).expect("a label line");
+    let mut contact = one.clone();
+    for key in ["index", "image", "mask"] {
+        contact.as_object_mut().expect("an object").remove(key);
+    }
+    // A dataset's labels carry the indented area's centre, which detectors are scored
+    // against.
+    contact["contact_centre"] = serde_json::json!([6.4, 3.8, 15.1]);
+    serde_json::json!({
+        "index": k,
+        "image": one["image"],
+        "mask": one["mask"],
+        "contacts": vec![contact; contacts],
+        "mask_pixels": if contacts == 0 { 0 } else { one["mask_pixels"].as_u64().unwrap_or(0) },
+        "mask_bbox": if contacts == 0 { serde_json::Value::Null } else { one["mask_bbox"].clone() },
+        "over_pressed": false,
+    })
+    .to_string()
+}
+
+/// `labels.jsonl` of a two-sample set as `geltip evaluate` reads it: one contact a line,
+/// and the scene form (two contacts, an empty frame).
+pub fn evaluate_labels() -> Vec<Vec<u8>> {
+    vec![
+        labels_jsonl()[0].clone(),
+        format!("{}\n{}\n", scene_label_line(0, 2), scene_label_line(1, 0)).into_bytes(),
+    ]
+}
+
+/// Writes a two-sample set of the paper sensor into `dir` with `labels`: its manifest and
+/// its images' files (any bytes: predictions need no pixels).
+pub fn write_evaluate_set(dir: &Path, labels: &[u8]) {
+    std::fs::create_dir_all(dir.join("images")).expect("a set directory");
+    for k in 0..2 {
+        std::fs::write(dir.join(format!("images/{k:06}.png")), b"png").expect("a file");
+    }
+    std::fs::write(dir.join(dataset::MANIFEST), evaluate_manifest(2)).expect("a manifest");
+    std::fs::write(dir.join(dataset::LABELS), labels).expect("labels");
+}
+
+/// Predictions for the samples `indices` (each once): the first near the seed labels'
+/// contact, the others a pixel far from it.
+pub fn evaluate_predictions(indices: &[u64]) -> String {
+    let mut seen = std::collections::BTreeSet::new();
+    let mut text = String::new();
+    for &k in indices {
+        if !seen.insert(k) {
+            continue;
+        }
+        let detection = if seen.len() == 1 {
+            r#"{"point": [6.5, 3.75, 15.0], "confidence": 0.9}"#
+        } else {
+            r#"{"pixel": [100.0, 100.0], "confidence": 0.2}"#
+        };
+        text.push_str(&format!(
+            "{{\"sample\": {k}, \"detections\": [{detection}]}}\n"
+        ));
+    }
+    text
+}
+
+/// `summary.json` files of real `geltip evaluate` runs (the predictions above on each set of
+/// [`evaluate_labels`]), as `--compare` reads them.
+pub fn evaluate_summaries() -> Vec<Vec<u8>> {
+    static S: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
+    S.get_or_init(|| {
+        let root = std::env::temp_dir().join(format!(
+            "geltip-fuzz-evaluate-summaries-{}",
+            std::process::id()
+        ));
+        let summaries = evaluate_labels()
+            .iter()
+            .enumerate()
+            .map(|(i, labels)| {
+                let dir = root.join(format!("run{i}"));
+                write_evaluate_set(&dir.join("set"), labels);
+                let (out, _) = evaluate_run(&dir, None).expect("a real evaluation");
+                let text = std::fs::read(out.join("summary.json")).expect("its summary");
+                // What differs from run to run (this process's paths, the time) fixed, so
+                // that a case's number alone makes its input.
+                let mut v: serde_json::Value = serde_json::from_slice(&text).expect("JSON");
+                v["detector"] = "predictions.jsonl".into();
+                v["source"] = "dataset data/test".into();
+                v["seconds"] = 0.25.into();
+                let text = serde_json::to_string_pretty(&v).expect("JSON");
+                (text + "\n").into_bytes()
+            })
+            .collect();
+        let _ = std::fs::remove_dir_all(&root);
+        summaries
+    })
+    .clone()
+}
+
+/// Scores [`evaluate_predictions`] of its samples on the set in `dir/set`, writing the report into
+/// `dir/out` beside `compare`'s: the report's directory and what the run gave back.
+pub fn evaluate_run(
+    dir: &Path,
+    compare: Option<&Path>,
+) -> geltip::Result<(PathBuf, geltip::jobs::evaluate::Outcome)> {
+    let source = geltip::jobs::evaluate::source(Some(&dir.join("set")), None, None)?;
+    let predictions = dir.join("predictions.jsonl");
+    std::fs::write(&predictions, evaluate_predictions(&source.indices())).expect("predictions");
+    let mut detector = geltip::evaluate::Predictions::read(&predictions, source.sensor())?;
+    let out = dir.join("out");
+    let outcome = geltip::jobs::evaluate::run(
+        &source,
+        &mut detector,
+        Some(3.0),
+        Some(&out),
+        compare,
+        |_, _| {},
+    )?;
+    Ok((out, outcome))
 }

@@ -20,7 +20,7 @@ const CI: usize = 2000;
 
 /// Every target: name, input format, seeds, feed, CI cases. One row a parser.
 #[rustfmt::skip]
-static TARGETS: [Target; 21] = [
+static TARGETS: [Target; 23] = [
     t("sensor toml", Format::Toml, seeds::sensor_tomls, sensor_toml, CI),
     t("scene json", Format::Json, seeds::scene_jsons, scene_json, CI),
     t("scene toml", Format::Toml, seeds::scene_tomls, scene_toml, CI),
@@ -42,6 +42,8 @@ static TARGETS: [Target; 21] = [
     t("evaluate detector answer", Format::Json, seeds::detector_answers, detector_answer, CI),
     t("calibrate contacts.jsonl", Format::JsonLines, seeds::calibrate_contacts, calibrate_contacts, CI),
     t("png calibrate empty frame", Format::Png, seeds::small_frames, png_empty_frame, CI),
+    t("evaluate labels.jsonl", Format::JsonLines, seeds::evaluate_labels, evaluate_labels, CI),
+    t("evaluate compare summary.json", Format::Json, seeds::evaluate_summaries, evaluate_compare, CI),
 ];
 
 const fn t(
@@ -466,4 +468,84 @@ fn detector_answer(_: &Path, input: &[u8]) -> Fed {
         evaluate::parse_line(paper(), &text, "answer"),
         |(_, found)| check_found(&found),
     )
+}
+
+/// A set's `labels.jsonl` as `geltip evaluate --dataset` reads it (through the evaluate
+/// source: manifest, sensor, every line checked), then scored and its report written.
+fn evaluate_labels(dir: &Path, input: &[u8]) -> Fed {
+    seeds::write_evaluate_set(&dir.join("set"), input);
+    verdict(seeds::evaluate_run(dir, None), |(out, outcome)| {
+        check_evaluation(&outcome.evaluation)?;
+        check_report(&out, input)
+    })
+}
+
+/// `--compare`'s `summary.json`: read, then set beside a real run's in the tables and
+/// charts.
+fn evaluate_compare(dir: &Path, input: &[u8]) -> Fed {
+    let compared = dir.join("compared");
+    std::fs::create_dir_all(&compared).expect("a compared directory");
+    file(&compared, "summary.json", input);
+    seeds::write_evaluate_set(&dir.join("set"), &seeds::evaluate_labels()[1]);
+    verdict(seeds::evaluate_run(dir, Some(&compared)), |(out, _)| {
+        check_report(&out, input)
+    })
+}
+
+/// Each of the set's samples scored once, and every number an evaluation holds finite: the
+/// labels read back, the matches' errors and the summary's statistics.
+fn check_evaluation(e: &evaluate::Evaluation) -> Result<(), String> {
+    // The set's samples 0 and 1, each scored once.
+    let mut samples: Vec<u64> = e.frames.iter().map(|f| f.truth.index).collect();
+    samples.sort_unstable();
+    if samples != [0, 1] {
+        return Err(format!(
+            "a set of samples 0 and 1 scored as samples {samples:?}"
+        ));
+    }
+    for f in &e.frames {
+        for c in &f.truth.contacts {
+            let mut v = c.target.to_array().to_vec();
+            v.extend(c.pixel.map_or(vec![], |p| p.to_array().to_vec()));
+            v.extend([c.depth_mm, c.s_mm, c.azimuth_deg]);
+            finite(&format!("sample {} labels", f.truth.index), &v)?;
+        }
+        for m in &f.score.matches {
+            finite("match", &[m.error_mm, m.error_px.unwrap_or(0.0)])?;
+        }
+    }
+    let s = e.summary();
+    let stats = |x: &Option<evaluate::metrics::ErrorStats>| {
+        x.map_or(vec![], |x| vec![x.mean, x.median, x.p95, x.max])
+    };
+    let mut v = stats(&s.error_mm);
+    v.extend(stats(&s.error_px));
+    v.extend(s.average_precision);
+    for p in &s.precision_recall {
+        v.extend([p.threshold, p.precision, p.recall]);
+    }
+    for g in s.by_region.iter().chain(&s.by_depth).chain(&s.by_object) {
+        v.extend(stats(&g.error_mm));
+    }
+    finite("summary", &v)
+}
+
+/// A report's tables and charts written, with no number that is not one: no `NaN` or `inf`
+/// the input did not hold itself (as a name).
+fn check_report(out: &Path, input: &[u8]) -> Result<(), String> {
+    let input = String::from_utf8_lossy(input);
+    for name in [
+        "tables.md",
+        "by_depth.svg",
+        "by_region.svg",
+        "failure_map.svg",
+        "precision_recall.svg",
+    ] {
+        let text = std::fs::read_to_string(out.join(name)).map_err(|e| format!("{name}: {e}"))?;
+        let made = |b: &&str| text.contains(b) && !input.contains(b);
+        if let Some(bad) = ["NaN", "inf"].into_iter().find(made) {
+            return Err(format!("{name} holds {bad}"));
+        }
+    }
+    Ok(())
 }
