@@ -81,13 +81,9 @@ fn hidden_sensor() -> anyhow::Result<Sensor> {
     c.lens.cx -= 8.0;
     c.lens.cy += 5.0;
     let led = |colour: [f64; 3], azimuth_deg: f64, z_mm: f64, intensity: f64| LedConfig {
-        colour,
-        azimuth_deg,
         z_mm,
-        radius_mm: None,
         intensity,
-        spread: 2.0,
-        falloff_mm: 10.0,
+        ..LedConfig::new(colour, azimuth_deg)
     };
     c.leds = Leds::List(vec![
         led([1.0, 0.3, 0.5], 60.0, -2.5, 2.6),

@@ -178,31 +178,7 @@ fn config_round_trips_through_toml() {
 #[test]
 fn listed_leds_light_paint_colour_and_channel_noise_load() {
     use geltip::sensor::{Leds, Noise};
-    let text = paper_toml()
-        + r#"
-[[leds]]
-colour = [1.0, 0.3, 0.8]
-azimuth_deg = 250.0
-z_mm = -1.5
-radius_mm = 4.0
-intensity = 2.5
-spread = 3.0
-falloff_mm = 8.0
-
-[[leds]]
-colour = [0.2, 1.0, 0.4]
-azimuth_deg = 20.0
-
-[light]
-ambient = [0.1, 0.05, 0.3]
-vignetting = [-0.3, 0.1]
-
-[paint]
-colour = [0.9, 0.8, 1.0]
-
-[render]
-noise = [1.5, 2.0, 0.5]
-"#;
+    let text = paper_toml() + "\n" + include_str!("common/calibrated_light.toml");
     let s = Sensor::from_toml("listed", &text).unwrap();
     let Leds::List(list) = &s.config.leds else {
         panic!("a list: {:?}", s.config.leds);

@@ -78,6 +78,22 @@ pub struct LedConfig {
     pub falloff_mm: f64,
 }
 
+impl LedConfig {
+    /// An LED of `colour` at `azimuth_deg` with the ring's height, distance, intensity,
+    /// spread and fall-off (the defaults a `[[leds]]` entry gets).
+    pub fn new(colour: [f64; 3], azimuth_deg: f64) -> LedConfig {
+        LedConfig {
+            colour,
+            azimuth_deg,
+            z_mm: default_led_z(),
+            radius_mm: None,
+            intensity: default_led_intensity(),
+            spread: default_led_spread(),
+            falloff_mm: default_led_falloff(),
+        }
+    }
+}
+
 fn default_led_z() -> f64 {
     LedsConfig::default().z_mm
 }

@@ -53,33 +53,7 @@ pub fn sensor_tomls() -> Vec<Vec<u8>> {
 /// A sensor file as `geltip calibrate` writes it: listed LEDs, ambient light, vignetting,
 /// a coloured paint, noise per channel.
 pub fn calibrated_toml() -> String {
-    small_toml()
-        + r#"
-[[leds]]
-colour = [1.0, 0.25, 0.8]
-azimuth_deg = 250.0
-z_mm = -1.5
-radius_mm = 4.0
-intensity = 2.5
-spread = 3.0
-falloff_mm = 8.0
-
-[[leds]]
-colour = [0.2, 1.0, 0.4]
-azimuth_deg = 20.0
-
-[light]
-ambient = [0.1, 0.05, 0.3]
-vignetting = [-0.3, 0.1]
-
-[paint]
-colour = [0.9, 0.8, 1.0]
-specular = 0.4
-shininess = 17.5
-
-[render]
-noise = [1.5, 2.0, 0.5]
-"#
+    small_toml() + "\n" + include_str!("../common/calibrated_light.toml")
 }
 
 /// Lines of a calibration's contacts file (each names `c.png`, which the feed writes).
