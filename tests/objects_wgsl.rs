@@ -3,12 +3,10 @@
 
 mod object_support;
 
-use geltip::gpu::shaders::create_compute_pipeline_from_source;
-use geltip::gpu::{read_buffer, GpuContext};
+use geltip::gpu::GpuContext;
 use geltip::object::{dims, Solid};
 use glam::DVec3;
 use object_support::*;
-use wgpu::util::DeviceExt;
 
 const SHADER: &str = "shaders/shared/object.wgsl";
 
@@ -187,49 +185,11 @@ fn wgsl_solid_sdf(ctx: &GpuContext, points: &[[f32; 4]]) -> Vec<f32> {
              }}\n\
          }}\n"
     );
-    let pipeline =
-        create_compute_pipeline_from_source(ctx, "object-test.wgsl", &source, "main", None)
-            .unwrap_or_else(|e| panic!("{e}"));
-    let input = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("object test points"),
-            contents: bytemuck::cast_slice(points),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-    let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("object test sdf"),
-        size: 4 * points.len() as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("object test"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("object test"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((points.len() as u32).div_ceil(64), 1, 1);
-    }
-    ctx.submit_and_wait("object test", encoder)
-        .unwrap_or_else(|e| panic!("{e}"));
-    read_buffer(ctx, &output, 0, points.len()).unwrap_or_else(|e| panic!("{e}"))
+    compute_f32(
+        ctx,
+        "object",
+        &source,
+        bytemuck::cast_slice(points),
+        points.len(),
+    )
 }

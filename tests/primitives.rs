@@ -6,18 +6,16 @@ mod common;
 mod object_support;
 mod support;
 
-use geltip::gpu::shaders::create_compute_pipeline_from_source;
-use geltip::gpu::{read_buffer, GpuContext};
+use geltip::gpu::GpuContext;
 use geltip::object::primitive::FIRST_PRIMITIVE_KIND;
 use geltip::object::{Object, Primitive, Solid};
 use geltip::render::gpu::Renderer;
 use geltip::render::{cpu, Hold, Place, Press};
 use geltip::sensor::Sensor;
 use glam::{DMat3, DVec3};
-use object_support::{repo_path, Rng};
+use object_support::{compute_f32, repo_path, Rng};
 use std::sync::Arc;
 use support::{close_enough, diff, rgb, small_sensor};
-use wgpu::util::DeviceExt;
 
 const SHADER: &str = "shaders/shared/object.wgsl";
 
@@ -130,9 +128,6 @@ fn wgsl_sdf(ctx: &GpuContext, points: &[(usize, DVec3)]) -> Vec<f32> {
              }}\n\
          }}\n"
     );
-    let pipeline =
-        create_compute_pipeline_from_source(ctx, "primitive-test.wgsl", &source, "main", None)
-            .unwrap_or_else(|e| panic!("{e}"));
     let mut input: Vec<u32> = Vec::new();
     for (k, q) in points {
         let p = shape(SHAPES[*k]);
@@ -141,48 +136,13 @@ fn wgsl_sdf(ctx: &GpuContext, points: &[(usize, DVec3)]) -> Vec<f32> {
         input.extend([p.kind(), 0, 0, 0]);
         input.extend(p.gpu_size().map(f32::to_bits));
     }
-    let input = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("primitive test points"),
-            contents: bytemuck::cast_slice(&input),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-    let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("primitive test sdf"),
-        size: 4 * points.len() as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("primitive test"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("primitive test"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((points.len() as u32).div_ceil(64), 1, 1);
-    }
-    ctx.submit_and_wait("primitive test", encoder)
-        .unwrap_or_else(|e| panic!("{e}"));
-    read_buffer(ctx, &output, 0, points.len()).unwrap_or_else(|e| panic!("{e}"))
+    compute_f32(
+        ctx,
+        "primitive",
+        &source,
+        bytemuck::cast_slice(&input),
+        points.len(),
+    )
 }
 
 /// Each kind rendered on the GPU against the CPU mirror of every stage, within the one
