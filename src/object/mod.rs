@@ -17,6 +17,8 @@ pub mod mesh;
 pub mod primitive;
 pub mod sdf_grid;
 pub mod solids;
+#[cfg(test)]
+mod test_rng;
 
 pub use mesh::Mesh;
 pub use primitive::Primitive;
