@@ -3,35 +3,30 @@
 //! when it has noise); backgrounds that are not images of the sensor's size are refused on
 //! one line naming the file, with nothing written.
 
+mod common;
+
+use common::{error_line, geltip};
 use image::RgbImage;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn geltip(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_geltip"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+/// Runs geltip with `args`, which must succeed.
+fn geltip_ok(args: &[&str]) {
+    let (code, _, err) = geltip(args);
+    assert_eq!(code, 0, "{err}");
 }
 
-/// The error line geltip printed (Mesa may print its own lines around it).
-fn error_line(stderr: &str) -> String {
-    let lines: Vec<&str> = stderr
-        .lines()
-        .filter(|l| l.starts_with("error: ") && !l.contains("XDG_RUNTIME_DIR"))
-        .collect();
-    assert_eq!(lines.len(), 1, "expected one error line, got: {stderr}");
-    lines[0].to_string()
+/// Renders `sensor`'s empty finger (on `background`, if any) to `out`.
+fn render_empty(sensor: &str, background: Option<&Path>, out: &Path) {
+    let mut args = vec!["render", "--sensor", sensor, "--reference"];
+    if let Some(bg) = background {
+        args.extend(["--background", s(bg)]);
+    }
+    args.extend(["-o", s(out)]);
+    geltip_ok(&args);
 }
 
 fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("geltip-background-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::temp_in("background", name)
 }
 
 fn s(p: &Path) -> &str {
@@ -77,20 +72,11 @@ fn a_contact_on_a_background_is_the_background_plus_the_change() {
         let mut args = SPHERE.to_vec();
         args.extend(["30", "-o", s(out)]);
         args.extend(extra);
-        let (code, err) = geltip(&args);
-        assert_eq!(code, 0, "{err}");
+        geltip_ok(&args);
     };
     contact(&plain, &[]);
     contact(&on, &["--background", s(&bg)]);
-    let (code, err) = geltip(&[
-        "render",
-        "--sensor",
-        "paper",
-        "--reference",
-        "-o",
-        s(&reference),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    render_empty("paper", None, &reference);
 
     let (plain, reference, on, bg) = (load(&plain), load(&reference), load(&on), load(&bg));
     let mut changed = 0;
@@ -115,17 +101,7 @@ fn the_empty_finger_on_a_background_is_the_background() {
     let bg = temp("bg-empty.png");
     background(&bg);
     let out = temp("ref-on-bg.png");
-    let (code, err) = geltip(&[
-        "render",
-        "--sensor",
-        "paper",
-        "--reference",
-        "--background",
-        s(&bg),
-        "-o",
-        s(&out),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    render_empty("paper", Some(&bg), &out);
     assert_eq!(load(&out), load(&bg));
 
     // A noisy sensor adds its noise to the background: zero-mean, of the sensor's spread,
@@ -135,29 +111,11 @@ fn the_empty_finger_on_a_background_is_the_background() {
     toml.push_str("\n[render]\nnoise = 3.0\nnoise_seed = 11\n");
     let noisy = temp("noisy.toml");
     std::fs::write(&noisy, toml).unwrap();
-    let (code, err) = geltip(&[
-        "render",
-        "--sensor",
-        s(&noisy),
-        "--reference",
-        "--background",
-        s(&bg),
-        "-o",
-        s(&out),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    render_empty(s(&noisy), Some(&bg), &out);
     let (out, bg) = (load(&out), load(&bg));
     // The noise-free empty finger: the same sensor without [render].
     let reference = temp("ref-plain.png");
-    let (code, err) = geltip(&[
-        "render",
-        "--sensor",
-        "paper",
-        "--reference",
-        "-o",
-        s(&reference),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    render_empty("paper", None, &reference);
     let reference = load(&reference);
     let unclamped = |v: u8| (12..=243).contains(&v);
     let mut diffs = Vec::new();
@@ -201,7 +159,7 @@ fn backgrounds_that_do_not_fit_are_refused_naming_the_file() {
         ] {
             let mut args = args;
             args.extend(["--background", s(bg), "-o", s(&out)]);
-            let (code, err) = geltip(&args);
+            let (code, _, err) = geltip(&args);
             assert_ne!(code, 0);
             let line = error_line(&err);
             assert!(line.contains(s(bg)) && line.contains(says), "{line}");

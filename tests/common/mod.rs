@@ -3,6 +3,8 @@
 
 use geltip::sensor::{Sensor, SensorConfig, PRESETS};
 use geltip::LensModel;
+use std::path::PathBuf;
+use std::process::Command;
 
 /// The paper preset's configuration, to derive variants from.
 pub fn paper_config() -> SensorConfig {
@@ -49,4 +51,35 @@ pub fn all_sensors() -> Vec<Sensor> {
         sensors.push(Sensor::from_config(name, c).unwrap());
     }
     sensors
+}
+
+/// Runs the `geltip` binary with `args`: its exit code (-1 when a signal ended it), its
+/// stdout and its stderr.
+pub fn geltip(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_geltip"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The error line geltip printed (Mesa may print its own lines around it).
+pub fn error_line(stderr: &str) -> &str {
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("error: ") && !l.contains("XDG_RUNTIME_DIR"))
+        .collect();
+    assert_eq!(lines.len(), 1, "expected one error line, got: {stderr}");
+    lines[0]
+}
+
+/// `name` in the temporary folder `geltip-{folder}-{process id}`, which is created.
+pub fn temp_in(folder: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("geltip-{folder}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
 }
