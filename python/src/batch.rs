@@ -80,22 +80,39 @@ impl<'py> Outputs<'py> {
         detached(py, what, || render(image_px, depth_px))
     }
 
-    /// `(images, labels, depth maps or None)`.
+    /// With the GIL released, makes the jobs (`jobs`, which checks them) and renders them
+    /// into the arrays with `work` on `sim`'s render streams ([`render_into`]); `what` names
+    /// the work in a detached error. What `work` gives with each frame, in order.
+    pub fn render<J: Sync, T: Send>(
+        &self,
+        py: Python<'py>,
+        sim: &Simulator,
+        what: &str,
+        jobs: impl FnOnce() -> geltip::Result<Vec<J>> + Send,
+        work: impl Fn(&mut Renderer, usize, &[J]) -> geltip::Result<Vec<(Frame, T)>> + Sync + Send,
+    ) -> PyResult<Vec<T>> {
+        let size = self.size;
+        self.fill(py, what, |images, depths| {
+            let jobs = jobs()?;
+            render_into(&mut *sim.pool()?, &jobs, images, depths, size, work)
+        })
+    }
+
+    /// `(images, labels, depth maps or None)`, the labels converted from JSON.
     pub fn with_labels(
         self,
         py: Python<'py>,
-        labels: Bound<'py, PyList>,
+        labels: impl IntoIterator<Item = serde_json::Value>,
     ) -> PyResult<Bound<'py, PyTuple>> {
+        let list = PyList::empty(py);
+        for l in labels {
+            list.append(json_to_py(py, &l)?)?;
+        }
         let depths = match self.depths {
             Some(d) => d.into_any(),
             None => py.None().into_bound(py),
         };
-        PyTuple::new(py, [self.images.into_any(), labels.into_any(), depths])
-    }
-
-    /// The frames' height and width.
-    pub fn size(&self) -> (usize, usize) {
-        self.size
+        PyTuple::new(py, [self.images.into_any(), list.into_any(), depths])
     }
 }
 
@@ -115,24 +132,15 @@ pub fn render<'py>(
     specs: &[ContactSpec],
     outputs: Outputs<'py>,
 ) -> PyResult<Bound<'py, PyTuple>> {
-    let size = outputs.size();
-    let truths = outputs.fill(py, "rendering a batch", |images, depths| {
-        // Every press is checked before any is rendered, so that an error names its index.
-        let presses = sim.presses(specs, false)?;
-        render_into(
-            &mut *sim.pool()?,
-            &presses,
-            images,
-            depths,
-            size,
-            |r, _, p| r.render_batch(p),
-        )
-    })?;
-    let labels = PyList::empty(py);
-    for t in &truths {
-        labels.append(json_to_py(py, &t.to_json())?)?;
-    }
-    outputs.with_labels(py, labels)
+    // Every press is checked before any is rendered, so that an error names its index.
+    let truths = outputs.render(
+        py,
+        sim,
+        "rendering a batch",
+        || sim.presses(specs, false),
+        |r, _, p| r.render_batch(p),
+    )?;
+    outputs.with_labels(py, truths.iter().map(|t| t.to_json()))
 }
 
 /// Renders `jobs` (a frame each) in submissions of [`MAX_BATCH`] on the pool's streams

@@ -1,9 +1,9 @@
 //! `Simulator.render_scenes`: frames of several contacts each, rendered on the Simulator's
 //! render streams, each frame written straight into the NumPy arrays returned.
 
-use crate::batch::{render_into, Outputs};
+use crate::batch::Outputs;
 use crate::contact::specs_of;
-use crate::convert::{json_to_py, repr};
+use crate::convert::repr;
 use crate::errors::bad;
 use crate::simulator::Simulator;
 use geltip::render::gpu::Renderer;
@@ -11,7 +11,7 @@ use geltip::render::{scene_labels, Press};
 use geltip::scene::ContactSpec;
 use geltip::GeltipError;
 use pyo3::prelude::*;
-use pyo3::types::{PyList, PyTuple};
+use pyo3::types::PyTuple;
 
 /// A list of scenes, each a list of contact dicts, as specs; errors name the scene
 /// (`scenes[2]: contacts[1].depth: ...`).
@@ -42,10 +42,9 @@ pub fn render<'py>(
     skip_untouching: bool,
     outputs: Outputs<'py>,
 ) -> PyResult<Bound<'py, PyTuple>> {
-    let size = outputs.size();
-    let labels = outputs.fill(py, "rendering scenes", |images, depths| {
-        // Every contact is checked before any frame renders (and placed on the finger, unless
-        // contacts that do not touch are skipped), so that an error names its scene.
+    // Every contact is checked before any frame renders (and placed on the finger, unless
+    // contacts that do not touch are skipped), so that an error names its scene.
+    let presses = || {
         let mut presses = Vec::with_capacity(frames.len());
         for (i, specs) in frames.iter().enumerate() {
             let scene = sim
@@ -53,39 +52,35 @@ pub fn render<'py>(
                 .map_err(|e| GeltipError::input(format!("scenes[{i}]"), e.to_string()))?;
             presses.push(scene);
         }
-        render_into(
-            &mut *sim.pool()?,
-            &presses,
-            images,
-            depths,
-            size,
-            |r, first, chunk| {
-                let rendered = r
-                    .render_scenes(chunk, skip_untouching)
-                    .map_err(|e| name_scene(r, first, chunk, e))?;
-                Ok(rendered
-                    .into_iter()
-                    .zip(chunk)
-                    .map(|((frame, kept), contacts)| {
-                        let truths: Vec<_> = kept.iter().map(|(_, t)| t.clone()).collect();
-                        let mut labels = scene_labels(&frame, &truths);
-                        if skip_untouching {
-                            let untouched: Vec<usize> = (0..contacts.len())
-                                .filter(|k| !kept.iter().any(|(i, _)| i == k))
-                                .collect();
-                            labels["untouched"] = serde_json::json!(untouched);
-                        }
-                        (frame, labels)
-                    })
-                    .collect())
-            },
-        )
-    })?;
-    let list = PyList::empty(py);
-    for l in &labels {
-        list.append(json_to_py(py, l)?)?;
-    }
-    outputs.with_labels(py, list)
+        Ok(presses)
+    };
+    let labels = outputs.render(
+        py,
+        sim,
+        "rendering scenes",
+        presses,
+        |r, first, chunk: &[Vec<Press>]| {
+            let rendered = r
+                .render_scenes(chunk, skip_untouching)
+                .map_err(|e| name_scene(r, first, chunk, e))?;
+            Ok(rendered
+                .into_iter()
+                .zip(chunk)
+                .map(|((frame, kept), contacts)| {
+                    let truths: Vec<_> = kept.iter().map(|(_, t)| t.clone()).collect();
+                    let mut labels = scene_labels(&frame, &truths);
+                    if skip_untouching {
+                        let untouched: Vec<usize> = (0..contacts.len())
+                            .filter(|k| !kept.iter().any(|(i, _)| i == k))
+                            .collect();
+                        labels["untouched"] = serde_json::json!(untouched);
+                    }
+                    (frame, labels)
+                })
+                .collect())
+        },
+    )?;
+    outputs.with_labels(py, labels)
 }
 
 /// An error rendering a submission of scenes, named by the scene whose contacts cannot be
