@@ -166,7 +166,22 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
     paint.specular = d.specular;
     paint.shininess = d.shininess;
     let n = model.leds + 1;
-    // Each LED's light alone (white, intensity 1) and the ambient's, at every sample.
+    // Each LED alone, white and of intensity 1, with no ambient light.
+    let alone: Vec<Lighting> = d
+        .lighting
+        .leds
+        .iter()
+        .map(|led| Lighting {
+            leds: vec![crate::sensor::Led {
+                colour: DVec3::ONE,
+                ..*led
+            }],
+            ambient: DVec3::ZERO,
+            paint_colour: DVec3::ONE,
+            vignetting: d.lighting.vignetting,
+        })
+        .collect();
+    // Each LED's light alone and the ambient's, at every sample.
     let basis: Vec<Vec<f64>> = samples
         .rays
         .iter()
@@ -182,22 +197,9 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
                 indentation: 0.0,
                 ray,
             };
-            let mut row: Vec<f64> = d
-                .lighting
-                .leds
+            let mut row: Vec<f64> = alone
                 .iter()
-                .map(|led| {
-                    let alone = Lighting {
-                        leds: vec![crate::sensor::Led {
-                            colour: DVec3::ONE,
-                            ..*led
-                        }],
-                        ambient: DVec3::ZERO,
-                        paint_colour: DVec3::ONE,
-                        vignetting: d.lighting.vignetting,
-                    };
-                    leds::shade_with(&alone, &paint, &hit).x * gain
-                })
+                .map(|light| leds::shade(light, &paint, &hit).x * gain)
                 .collect();
             row.push(gain);
             row

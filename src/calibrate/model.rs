@@ -1,7 +1,7 @@
 //! The empty finger's picture as a function of the values calibration fits: each LED's
 //! place, colour, spread and fall-off, the ambient light, the paint's shine, the camera's
 //! vignetting and the finger's length (where the hemisphere meets the cylinder). It is the
-//! renderer's own light model ([`crate::render::leds::shade_with`]), evaluated at sampled
+//! renderer's own light model ([`crate::render::leds::shade`]), evaluated at sampled
 //! pixels, so the fitted values mean in `sensor.toml` what they meant while fitting.
 
 use crate::finger::Finger;
@@ -246,7 +246,7 @@ impl Model {
                         ray,
                     };
                     let gain = d.lighting.vignette(x);
-                    let c = leds::shade_with(&d.lighting, &paint, &hit) * gain;
+                    let c = leds::shade(&d.lighting, &paint, &hit) * gain;
                     c.to_array().map(|v| 255.0 * v.max(0.0).powf(1.0 / 2.2))
                 }
                 None => [0.0; 3],

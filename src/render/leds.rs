@@ -7,13 +7,6 @@ use super::camera::SkinHit;
 use crate::sensor::{Lighting, PaintConfig, Sensor};
 use glam::{DVec2, DVec3};
 
-pub use crate::sensor::Led;
-
-/// The sensor's LEDs in the camera frame.
-pub fn leds(sensor: &Sensor) -> Vec<Led> {
-    sensor.lighting().leds
-}
-
 /// Relative emission of an LED towards unit direction `towards`: it shines up the finger.
 pub fn emission(towards: DVec3, spread: f64) -> f64 {
     if spread == 0.0 {
@@ -22,13 +15,9 @@ pub fn emission(towards: DVec3, spread: f64) -> f64 {
     towards.z.max(0.0).powf(spread)
 }
 
-/// Linear radiance reaching the camera from a skin point.
-pub fn shade(sensor: &Sensor, hit: &SkinHit) -> DVec3 {
-    shade_with(&sensor.lighting(), &sensor.config.paint, hit)
-}
-
-/// [`shade`] with the light already resolved (what a loop over many pixels calls).
-pub fn shade_with(light: &Lighting, paint: &PaintConfig, hit: &SkinHit) -> DVec3 {
+/// Linear radiance reaching the camera from a skin point, under the sensor's light resolved
+/// once ([`Sensor::lighting`]) for every pixel shaded.
+pub fn shade(light: &Lighting, paint: &PaintConfig, hit: &SkinHit) -> DVec3 {
     // The paint faces the inside of the finger, where the camera and the LEDs are.
     let facing = -hit.normal;
     let view = -hit.ray;
@@ -59,7 +48,7 @@ pub fn vignette(sensor: &Sensor, light: &Lighting, pixel: DVec2) -> f64 {
 /// The 8-bit colour of `pixel` whose ray meets `hit`: shaded, vignetted, gamma-encoded.
 pub fn pixel_colour(sensor: &Sensor, light: &Lighting, pixel: DVec2, hit: &SkinHit) -> [u8; 3] {
     let gain = vignette(sensor, light, pixel);
-    (shade_with(light, &sensor.config.paint, hit) * gain)
+    (shade(light, &sensor.config.paint, hit) * gain)
         .to_array()
         .map(encode)
 }
