@@ -1,7 +1,7 @@
 //! Stage 4, LEDs: point lights at the base of the finger (the paper's ring of three, or any
-//! list of up to eight) light the painted skin from the inside (diffuse + Blinn-Phong specular, inverse-square-like
-//! fall-off, a little ambient light); the result is gamma-encoded to 8 bits, with optional
-//! seeded sensor noise. CPU mirror of `shaders/leds.wgsl` (same names).
+//! list of up to eight) light the painted skin from the inside (diffuse + Blinn-Phong
+//! specular, inverse-square-like fall-off, ambient light, the paint's colour, vignetting);
+//! the result is gamma-encoded to 8 bits, with optional seeded sensor noise. CPU mirror of `shaders/leds.wgsl` (same names).
 
 use super::camera::SkinHit;
 use crate::sensor::{Lighting, PaintConfig, Sensor};
