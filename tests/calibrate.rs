@@ -87,6 +87,8 @@ fn a_hidden_lens_and_light_come_back() -> Result<()> {
     let c = calibrate::calibrate(&quick(start.clone(), frames), &|_| {})?;
     // Tried with 3 to 6, the fit keeps the hidden sensor's 3 LEDs.
     assert_eq!(c.leds, 3);
+    // The finger the sensor file states is held unless the geometry is asked for.
+    assert_eq!(c.config.finger, start.config.finger);
 
     let truth = &hidden.config.lens;
     let focal = value(&c, "lens.focal_px");

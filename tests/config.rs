@@ -25,7 +25,8 @@ fn paper_toml() -> String {
 fn presets_load_and_validate() {
     for (name, _) in PRESETS {
         let s = Sensor::load(name).unwrap();
-        assert_eq!(s.width, 640);
+        assert_eq!(s.width, s.config.image.width);
+        assert!(s.width >= 480);
         assert!(!s.config.description.is_empty());
     }
 }
@@ -246,16 +247,113 @@ fn listed_leds_light_paint_colour_and_channel_noise_are_refused_by_field() {
         assert!(err.contains(field), "'{err}' does not name {field}");
         assert!(!err.contains('\n'), "{err:?}");
     }
-    let nine: String = (0..9)
+    let many: String = (0..17)
         .map(|k| {
             format!(
                 "[[leds]]\ncolour = [1.0, 1.0, 1.0]\nazimuth_deg = {}\n",
-                40 * k
+                20 * k
             )
         })
         .collect();
-    let err = Sensor::from_toml("nine", &(paper_toml() + "\n" + &nine))
+    let err = Sensor::from_toml("many", &(paper_toml() + "\n" + &many))
         .unwrap_err()
         .to_string();
-    assert!(err.contains("leds") && err.contains("1 to 8"), "{err}");
+    assert!(err.contains("leds") && err.contains("1 to 16"), "{err}");
+}
+
+/// Gel LEDs (light carried up the gel) and a camera with its own colour matrix and gamma:
+/// loaded, resolved and written back the same; the `allsight` preset has nine such LEDs.
+#[test]
+fn gel_leds_and_a_camera_response_load_and_round_trip() {
+    use geltip::sensor::{LedKind, Leds};
+    let text = paper_toml()
+        + "\n[[leds]]\nkind = \"gel\"\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 30.0\nwidth_mm = 2.5\n"
+        + "[[leds]]\ncolour = [0.0, 1.0, 0.0]\nazimuth_deg = 150.0\n"
+        + "[camera]\ncolour_matrix = [[1.0, -0.2, 0.0], [0.0, 1.0, 0.0], [0.0, -0.1, 1.0]]\ngamma = [2.4, 2.2, 3.0]\n";
+    let s = Sensor::from_toml("gel", &text).unwrap();
+    let light = s.lighting();
+    let LedKind::Gel(band) = light.leds[0].kind else {
+        panic!("a gel LED: {:?}", light.leds[0]);
+    };
+    assert_eq!(band.width_mm, 2.5);
+    assert_eq!(band.widening, geltip::sensor::GelSpread::DEFAULT.widening);
+    assert_eq!(light.leds[1].kind, LedKind::Point);
+    assert_eq!(light.camera.gamma, [2.4, 2.2, 3.0]);
+    let again = toml::to_string(&s.config).unwrap();
+    assert_eq!(Sensor::from_toml("again", &again).unwrap().config, s.config);
+    // A sensor without [camera] writes none.
+    assert!(!toml::to_string(&common::paper_config())
+        .unwrap()
+        .contains("camera"));
+    let allsight = Sensor::preset("allsight").unwrap();
+    let Leds::List(list) = &allsight.config.leds else {
+        panic!("listed LEDs");
+    };
+    assert_eq!(list.len(), 9);
+    assert!(allsight
+        .lighting()
+        .leds
+        .iter()
+        .all(|l| matches!(l.kind, LedKind::Gel(_))));
+}
+
+/// A gel LED's band, and the camera, out of range are refused naming the field; a point LED
+/// given a band is refused too.
+#[test]
+fn gel_leds_and_the_camera_are_refused_by_field() {
+    for (bad, field) in [
+        (
+            "[[leds]]\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\nwidth_mm = 2.0\n",
+            "leds[0].width_mm",
+        ),
+        (
+            "[[leds]]\nkind = \"gel\"\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\nwidth_mm = 0.0\n",
+            "leds[0].width_mm",
+        ),
+        (
+            "[[leds]]\nkind = \"gel\"\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\nattenuation_mm = -1.0\n",
+            "leds[0].attenuation_mm",
+        ),
+        (
+            "[[leds]]\nkind = \"glow\"\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\n",
+            "leds",
+        ),
+        ("[camera]\ngamma = [2.2, 0.0, 2.2]\n", "camera.gamma[1]"),
+        ("[camera]\ngamma = [2.2, 2.2, 9.0]\n", "camera.gamma[2]"),
+        (
+            "[camera]\ncolour_matrix = [[1.0, 0.0, 0.0], [0.0, nan, 0.0], [0.0, 0.0, 1.0]]\n",
+            "camera.colour_matrix[1][1]",
+        ),
+    ] {
+        let text = paper_toml() + "\n" + bad;
+        let err = Sensor::from_toml("bad", &text).expect_err(bad).to_string();
+        assert!(err.contains(field), "'{err}' does not name {field}");
+        assert!(!err.contains('\n'), "{err:?}");
+    }
+}
+
+/// A thick gel needs no hand-set drape: a file that gives none gets the gel's thickness (2 mm
+/// for thinner gels, as before); a drape given thinner than the gel is still refused.
+#[test]
+fn a_thick_gel_gets_a_drape_of_its_thickness() {
+    let thick = paper_toml().replace("shell_thickness_mm = 1.5", "shell_thickness_mm = 3.5");
+    assert_ne!(thick, paper_toml());
+    let s = Sensor::from_toml("thick", &thick).unwrap();
+    assert_eq!(s.config.elastomer.drape_mm, 3.5);
+    assert_eq!(
+        Sensor::preset("paper").unwrap().config.elastomer.drape_mm,
+        2.0
+    );
+    assert_eq!(
+        Sensor::preset("allsight")
+            .unwrap()
+            .config
+            .elastomer
+            .drape_mm,
+        3.5
+    );
+    let err = Sensor::from_toml("thin drape", &(thick + "\n[elastomer]\ndrape_mm = 2.0\n"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("elastomer.drape_mm"), "{err}");
 }

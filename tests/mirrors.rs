@@ -107,6 +107,7 @@ fn gpu_matches_the_cpu_pipeline_under_a_calibrated_light() {
             intensity: 1.5 + azimuth_deg / 360.0,
             spread,
             falloff_mm,
+            ..LedConfig::new(colour, azimuth_deg)
         };
     c.leds = Leds::List(vec![
         led([1.0, 0.2, 0.7], 10.0, -2.0, 1.5, 8.0),
@@ -141,6 +142,73 @@ fn gpu_matches_the_cpu_pipeline_under_a_calibrated_light() {
     assert!(!close_enough(&diff(
         &rgb(&ring.frame),
         &rgb(&listed.frame),
+        3
+    )));
+}
+
+/// Light carried in the gel (gel LEDs, each with its own band, beside a point LED) and a
+/// camera with its own colour matrix and gamma: the shaders' gel_light and encode_gamma
+/// against the CPU mirror, on the reference and four contacts (whose flanks the relief
+/// lights).
+#[test]
+fn gpu_matches_the_cpu_pipeline_under_gel_light_and_a_camera_response() {
+    use geltip::sensor::{CameraConfig, LedConfig, Leds};
+    let mut c = small_sensor().config.clone();
+    let gel = |colour: [f64; 3], azimuth_deg: f64, width: f64, relief: f64| LedConfig {
+        intensity: 1.2,
+        z_mm: 0.5,
+        width_mm: Some(width),
+        widening: Some(0.15),
+        attenuation_mm: Some(14.0),
+        relief: Some(relief),
+        ..LedConfig::gel(colour, azimuth_deg)
+    };
+    let mut leds: Vec<LedConfig> = (0..12)
+        .map(|i| {
+            let a = 30.0 * i as f64;
+            let colour = [[1.0, 0.1, 0.2], [0.1, 1.0, 0.3], [0.2, 0.3, 1.0]][i % 3];
+            gel(colour, a, 1.5 + 0.2 * i as f64, 0.5 + 0.25 * i as f64)
+        })
+        .collect();
+    leds.push(LedConfig::new([0.4, 0.4, 0.4], 45.0));
+    c.leds = Leds::List(leds);
+    c.camera = CameraConfig {
+        colour_matrix: [[1.0, -0.3, -0.1], [-0.2, 1.0, -0.05], [-0.1, -0.25, 1.0]],
+        gamma: [2.5, 2.8, 3.3],
+    };
+    c.light.ambient = Some([0.05, 0.04, 0.06]);
+    let sensor = Sensor::from_config("small-gel", c.clone()).unwrap();
+    let grid = render::HeightfieldGrid::for_sensor(&sensor);
+    let constants = render::uniforms::SensorUniform::new(&sensor, &grid).pipeline_constants();
+    let value = |name: &str| constants.iter().find(|(n, _)| *n == name).map(|&(_, v)| v);
+    assert_eq!(value("GEL_LEDS"), Some(1.0));
+    assert_eq!(value("CAMERA_RESPONSE"), Some(1.0));
+    assert_eq!(value("LED_COUNT"), Some(13.0));
+    gpu_matches_cpu(&sensor);
+    // Each term changes the picture: without the camera's response, or with the gel LEDs'
+    // relief off, the CPU mirror's frames are far from these.
+    let with = cpu::render(&sensor, None).unwrap();
+    let mut plain = c.clone();
+    plain.camera = CameraConfig::default();
+    let plain = cpu::render(&Sensor::from_config("plain", plain).unwrap(), None).unwrap();
+    assert!(!close_enough(&diff(
+        &rgb(&with.frame),
+        &rgb(&plain.frame),
+        3
+    )));
+    let press = contact(Solid::Sphere, Place::Rotation(60.0), 1.0);
+    let pressed = cpu::render(&sensor, Some(&press)).unwrap();
+    let mut flat = c;
+    if let Leds::List(list) = &mut flat.leds {
+        for l in list.iter_mut().filter(|l| l.relief.is_some()) {
+            l.relief = Some(0.0);
+        }
+    }
+    let flat = Sensor::from_config("flat", flat).unwrap();
+    let flat_pressed = cpu::render(&flat, Some(&press)).unwrap();
+    assert!(!close_enough(&diff(
+        &rgb(&pressed.frame),
+        &rgb(&flat_pressed.frame),
         3
     )));
 }

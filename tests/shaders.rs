@@ -493,6 +493,12 @@ fn uniform_structs_equal_the_shaders() {
         member!(S, led_position),
         member!(S, led_colour),
         member!(S, led_light),
+        member!(S, led_band),
+        member!(S, colour_matrix),
+        member!(S, inverse_gamma),
+        member!(S, gel_leds),
+        member!(S, camera_response),
+        member!(S, pad),
         member!(S, blend_weights),
     ];
     let frame = vec![

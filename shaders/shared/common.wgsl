@@ -7,6 +7,7 @@
 
 const PI: f32 = 3.14159265358979;
 const HALF_PI: f32 = 1.57079632679490;
+const TAU: f32 = 6.28318530717959;
 
 const LENS_PINHOLE: u32 = 0u;
 const LENS_EQUIDISTANT: u32 = 1u;
@@ -51,11 +52,20 @@ struct Sensor {
     paint_colour: vec4<f32>,
     // Vignetting 1 + x r^2 + y r^4, r the distance from the principal point times z.
     vignetting: vec4<f32>,
-    // Per LED (led_count of MAX_LEDS): position, colour, and x intensity, y spread,
-    // z falloff_mm.
-    led_position: array<vec4<f32>, 8>,
-    led_colour: array<vec4<f32>, 8>,
-    led_light: array<vec4<f32>, 8>,
+    // Per LED (led_count of MAX_LEDS): position (w 1 for a gel LED, 0 for a point LED),
+    // colour, x intensity, y spread, z falloff_mm; a gel LED's band: x width_mm,
+    // y widening, z attenuation_mm, w relief.
+    led_position: array<vec4<f32>, 16>,
+    led_colour: array<vec4<f32>, 16>,
+    led_light: array<vec4<f32>, 16>,
+    led_band: array<vec4<f32>, 16>,
+    // The camera: its colour matrix's rows (xyz) and one over each channel's gamma (xyz).
+    colour_matrix: array<vec4<f32>, 3>,
+    inverse_gamma: vec4<f32>,
+    // Read as the pipeline constants GEL_LEDS and CAMERA_RESPONSE.
+    gel_leds: u32,
+    camera_response: u32,
+    pad: vec2<u32>,
     // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
     blend_weights: array<vec4<f32>, 65>,
 }
@@ -114,6 +124,10 @@ override LED_COUNT: i32 = 3;
 override LED_SPREAD: f32 = 2.0;
 override PAINT_SHININESS: f32 = 24.0;
 override VIGNETTING: bool = false;
+// Whether any LED is a gel LED (shared/shading.wgsl gel_light), and whether the camera has
+// its own colour matrix and gamma (else the plain gamma 2.2).
+override GEL_LEDS: bool = false;
+override CAMERA_RESPONSE: bool = false;
 
 const GRID_OBJECT: u32 = 100u;
 // object_kind of the reference frame (no object; every pixel is shaded).

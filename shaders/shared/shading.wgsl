@@ -41,6 +41,10 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
     let view = -ray;
     var colour = sensor.ambient.xyz;
     for (var i = 0; i < LED_COUNT; i++) {
+        if GEL_LEDS && sensor.led_position[i].w == 1.0 {
+            colour += sensor.led_colour[i].xyz * (sensor.led_light[i].x * gel_light(i, p, normal));
+            continue;
+        }
         let to_led = sensor.led_position[i].xyz - p;
         let dist = length(to_led);
         let l = to_led / dist;
@@ -55,6 +59,39 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
         colour += sensor.led_colour[i].xyz * (sensor.led_light[i].x * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
     }
     return colour * sensor.paint_colour.xyz;
+}
+
+// How bright gel LED i makes the skin at p (normal `normal`): a band up the finger above the
+// LED that widens and fades, times the skin's tilt against the light's path. Mirror:
+// src/render/leds.rs gel_light.
+fn gel_light(i: i32, p: vec3<f32>, normal: vec3<f32>) -> f32 {
+    let led = sensor.led_position[i].xyz;
+    let band = sensor.led_band[i];
+    let r = sensor.radius;
+    let d = sensor.cylinder_length;
+    let rho = length(p.xy);
+    let azimuth = atan2(p.y, p.x);
+    var latitude = 0.0;
+    var up = p.z - led.z;
+    if p.z > d {
+        latitude = atan2(p.z - d, rho);
+        up = d - led.z + r * latitude;
+    }
+    up = max(up, 0.0);
+    var turn = azimuth - atan2(led.y, led.x);
+    turn -= TAU * round(turn / TAU);
+    let across = r * turn * cos(latitude);
+    let width = band.x + band.y * up;
+    let g = across / width;
+    let glow = exp(-0.5 * g * g) * (band.x / width) * exp(-up / band.z);
+    let way_up = vec3<f32>(-sin(latitude) * cos(azimuth), -sin(latitude) * sin(azimuth), cos(latitude));
+    return glow * max(1.0 + band.w * dot(normal, way_up), 0.0);
+}
+
+// One 8-bit value from a linear channel and one over the camera's gamma for it.
+fn encode_gamma(linear: f32, inverse_gamma: f32) -> u32 {
+    let v = pow(clamp(linear, 0.0, 1.0), inverse_gamma) * 255.0;
+    return u32(clamp(round(v), 0.0, 255.0));
 }
 
 fn encode(linear: f32) -> u32 {
@@ -76,7 +113,13 @@ fn write_pixel(xy: vec2<u32>, colour: vec3<f32>, depth: f32) {
         let r2 = r * r;
         c = c * (1.0 + sensor.vignetting.x * r2 + sensor.vignetting.y * r2 * r2);
     }
-    image[i] = pack_rgba(vec3<u32>(encode(c.x), encode(c.y), encode(c.z)));
+    if CAMERA_RESPONSE {
+        let m = vec3<f32>(dot(sensor.colour_matrix[0].xyz, c), dot(sensor.colour_matrix[1].xyz, c), dot(sensor.colour_matrix[2].xyz, c));
+        let g = sensor.inverse_gamma;
+        image[i] = pack_rgba(vec3<u32>(encode_gamma(m.x, g.x), encode_gamma(m.y, g.y), encode_gamma(m.z, g.z)));
+    } else {
+        image[i] = pack_rgba(vec3<u32>(encode(c.x), encode(c.y), encode(c.z)));
+    }
     indentation[i] = depth;
 }
 

@@ -4,9 +4,8 @@
 //! a coarse sample, the best polished on a fine one.
 
 use super::frames::SATURATED;
-use super::model::{Model, Samples, PER_LED};
+use super::model::{Model, Samples};
 use super::solve::{levenberg_marquardt, solve_dense, Fit};
-use crate::render::camera::SkinHit;
 use crate::render::leds;
 use crate::sensor::Lighting;
 use glam::DVec3;
@@ -122,10 +121,12 @@ pub fn fit_empty(
 /// of the valleys where an LED's brightness and its distance trade off.
 fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
     let bounds = model.bounds();
-    let colour_slots = colour_slots(model);
-    let free: Vec<usize> = (0..model.len())
-        .filter(|i| !colour_slots.contains(i))
-        .collect();
+    let mut held = colour_slots(model);
+    // The camera stays at the start's until the polish: the linear colours assume it.
+    if let Some(i) = model.layout().camera {
+        held.extend(i..i + 9);
+    }
+    let free: Vec<usize> = (0..model.len()).filter(|i| !held.contains(i)).collect();
     let reduced_bounds: Vec<_> = free.iter().map(|&i| bounds[i]).collect();
     let full = model.initial(rotation);
     let expand = |q: &[f64]| {
@@ -150,11 +151,21 @@ fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
 
 /// Where the LED colours and the ambient light sit in a parameter vector.
 fn colour_slots(model: &Model) -> Vec<usize> {
+    let l = model.layout();
+    let first = colour_offset(model);
     let mut slots: Vec<usize> = (0..model.leds)
-        .flat_map(|k| (3..6).map(move |c| k * PER_LED + c))
+        .flat_map(|k| (0..3).map(move |c| k * l.per_led + first + c))
         .collect();
-    slots.extend((0..3).map(|c| model.leds * PER_LED + c));
+    slots.extend((0..3).map(|c| l.ambient + c));
     slots
+}
+
+/// Where an LED's colour starts among its values.
+fn colour_offset(model: &Model) -> usize {
+    match model.kind {
+        crate::sensor::LedKindName::Point => 3,
+        crate::sensor::LedKindName::Gel => 1,
+    }
 }
 
 /// Sets the LED colours and the ambient light of `p` to the linear least-squares fit of the
@@ -166,6 +177,9 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
     paint.specular = d.specular;
     paint.shininess = d.shininess;
     let n = model.leds + 1;
+    let gamma = d.lighting.camera.gamma;
+    let l = model.layout();
+    let first = colour_offset(model);
     // Each LED alone, white and of intensity 1, with no ambient light.
     let alone: Vec<Lighting> = d
         .lighting
@@ -178,7 +192,7 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
             }],
             ambient: DVec3::ZERO,
             paint_colour: DVec3::ONE,
-            vignetting: d.lighting.vignetting,
+            ..d.lighting.clone()
         })
         .collect();
     // Each LED's light alone and the ambient's, at every sample.
@@ -186,20 +200,20 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
         .rays
         .iter()
         .zip(&samples.radial)
-        .map(|(&ray, &x)| {
+        .zip(&samples.hits)
+        .map(|((&ray, &x), cached)| {
             let gain = d.lighting.vignette(x);
-            let Some(s) = d.finger.surface_along(ray) else {
-                return vec![0.0; n];
+            let hit = if model.geometry {
+                super::model::hit_on(&d.finger, ray)
+            } else {
+                *cached
             };
-            let hit = SkinHit {
-                point: s.point,
-                normal: s.normal,
-                indentation: 0.0,
-                ray,
+            let Some((hit, place)) = hit else {
+                return vec![0.0; n];
             };
             let mut row: Vec<f64> = alone
                 .iter()
-                .map(|light| leds::shade(light, &paint, &hit).x * gain)
+                .map(|light| leds::shade_at(light, &paint, &hit, Some(&place)).x * gain)
                 .collect();
             row.push(gain);
             row
@@ -214,7 +228,7 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
             }
             // A clipped value says only "at least full scale": taken as full scale here,
             // the fit that follows lets it rise.
-            let y = (obs[c].min(255.0) / 255.0).powf(2.2);
+            let y = (obs[c].min(255.0) / 255.0).powf(gamma[c]);
             for i in 0..n {
                 for j in 0..n {
                     ata[i * n + j] += row[i] * row[j];
@@ -227,9 +241,9 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
         }
         if let Some(x) = solve_dense(&ata, &atb, n) {
             for k in 0..model.leds {
-                p[k * PER_LED + 3 + c] = x[k].max(0.0);
+                p[k * l.per_led + first + c] = x[k].max(0.0);
             }
-            p[model.leds * PER_LED + c] = x[model.leds].max(0.0);
+            p[l.ambient + c] = x[model.leds].max(0.0);
         }
     }
 }

@@ -15,7 +15,7 @@ pub mod quality;
 pub mod solve;
 
 use crate::error::{GeltipError, Result};
-use crate::sensor::{Noise, Sensor, SensorConfig};
+use crate::sensor::{LedKindName, Noise, Sensor, SensorConfig};
 use circle::ImageCircle;
 use frames::EmptyFrames;
 use glam::DVec2;
@@ -37,8 +37,131 @@ pub struct Options {
     pub leds: usize,
     /// Pixels the polish compares (the starts compare a fifth as many).
     pub samples: usize,
-    /// Rotations of the LEDs' starting ring tried (evenly spaced over 360 degrees).
+    /// Rotations of the LEDs' starting ring tried (evenly spaced over 360 degrees; one when
+    /// the start sensor lists the LEDs fitted).
     pub starts: usize,
+    /// What is fitted; the rest is held at the start sensor's values.
+    pub fit: FitSet,
+    /// Which kind of LED to fit; by default the start sensor's listed LEDs' kind (point
+    /// LEDs for the ring).
+    pub led_kind: Option<LedKindName>,
+}
+
+/// What calibration fits (`--fit`): each part is fitted or held at the start sensor's
+/// values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FitSet {
+    /// The lens from the image circle (its centre and the focal length that puts the field
+    /// of view on its edge).
+    pub lens: bool,
+    /// LEDs, ambient light, paint shine, vignetting.
+    pub light: bool,
+    /// The camera's colour matrix and gamma.
+    pub camera: bool,
+    /// The finger's length (the cylinder's).
+    pub geometry: bool,
+    /// The imprint's elastomer values, from the frames with known contacts.
+    pub imprint: bool,
+}
+
+impl Default for FitSet {
+    /// Lens, light, camera and imprint; the geometry the sensor file states is held.
+    fn default() -> Self {
+        FitSet {
+            lens: true,
+            light: true,
+            camera: true,
+            geometry: false,
+            imprint: true,
+        }
+    }
+}
+
+impl FitSet {
+    pub const PARTS: [&'static str; 5] = ["lens", "light", "camera", "geometry", "imprint"];
+
+    /// Parses a comma-separated list of [`FitSet::PARTS`] (`"light,lens"`).
+    pub fn parse(text: &str) -> Result<FitSet> {
+        let mut set = FitSet {
+            lens: false,
+            light: false,
+            camera: false,
+            geometry: false,
+            imprint: false,
+        };
+        for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            match part {
+                "lens" => set.lens = true,
+                "light" => set.light = true,
+                "camera" => set.camera = true,
+                "geometry" => set.geometry = true,
+                "imprint" => set.imprint = true,
+                other => {
+                    return Err(GeltipError::option(
+                        "fit",
+                        format!(
+                            "unknown part '{other}'; choose from {}",
+                            FitSet::PARTS.join(", ")
+                        ),
+                    ))
+                }
+            }
+        }
+        if set == FitSet::parse_none() {
+            return Err(GeltipError::option(
+                "fit",
+                format!(
+                    "names nothing to fit; choose from {}",
+                    FitSet::PARTS.join(", ")
+                ),
+            ));
+        }
+        if (set.camera || set.geometry) && !set.light {
+            return Err(GeltipError::option(
+                "fit",
+                "the camera and the geometry are fitted with the light; add light",
+            ));
+        }
+        Ok(set)
+    }
+
+    fn parse_none() -> FitSet {
+        FitSet {
+            lens: false,
+            light: false,
+            camera: false,
+            geometry: false,
+            imprint: false,
+        }
+    }
+
+    /// The parts fitted, comma-separated.
+    pub fn names(&self) -> String {
+        let on = [
+            self.lens,
+            self.light,
+            self.camera,
+            self.geometry,
+            self.imprint,
+        ];
+        FitSet::PARTS
+            .iter()
+            .zip(on)
+            .filter(|(_, on)| *on)
+            .map(|(n, _)| *n)
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+}
+
+/// A fitted value that ended on its box's edge: the frames pushed it as far as the model
+/// lets it go.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AtBound {
+    pub name: String,
+    pub value: f64,
+    /// "lower" or "upper".
+    pub side: &'static str,
 }
 
 impl Options {
@@ -50,6 +173,8 @@ impl Options {
             leds: 0,
             samples: 16_000,
             starts: DEFAULT_STARTS,
+            fit: FitSet::default(),
+            led_kind: None,
         }
     }
 }
@@ -90,10 +215,20 @@ pub struct Calibration {
     /// Every start tried (LED count, rotation) and the coarse cost it reached.
     pub starts: Vec<fit::Start>,
     pub contacts: Option<contacts::ContactFit>,
+    /// Every fitted value that ended on a bound.
+    pub at_bounds: Vec<AtBound>,
+    /// What was fitted.
+    pub fit: FitSet,
 }
 
 /// Calibrates `options.start` to the frames; `progress` hears each stage's name.
 pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibration> {
+    if !options.fit.light && options.fit.camera {
+        return Err(GeltipError::option(
+            "fit",
+            "the camera is fitted with the light; add light",
+        ));
+    }
     if options.leds > crate::sensor::MAX_LEDS {
         return Err(GeltipError::option(
             "leds",
@@ -108,13 +243,33 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
     let frames = EmptyFrames::load(&options.empty)?;
     progress("finding the image circle");
     let circle = circle::find(&frames.mean)?;
-    let lensed = with_lens(&options.start, &frames, &circle)?;
-    progress("fitting the light");
-    let fitted = fit_light(options, &lensed, &frames, &circle)?;
-    let model = &fitted.model;
-    let mut config = model.config(&fitted.params);
-    let mut values = lens_values(&model.start, &circle);
-    values.extend(light_values(&fitted));
+    let lensed = if options.fit.lens {
+        with_lens(&options.start, &frames, &circle)?
+    } else {
+        held_lens(&options.start, &frames)?
+    };
+    let mut values = if options.fit.lens {
+        lens_values(&lensed, &circle)
+    } else {
+        Vec::new()
+    };
+    let (mut config, leds, fit_cost, fit_iterations, starts, at_bounds) = if options.fit.light {
+        progress("fitting the light");
+        let fitted = fit_light(options, &lensed, &frames, &circle)?;
+        let model = &fitted.model;
+        values.extend(light_values(&fitted));
+        (
+            model.config(&fitted.params),
+            model.leds,
+            fitted.fit.cost,
+            fitted.fit.iterations,
+            fitted.starts.clone(),
+            at_bounds(&fitted),
+        )
+    } else {
+        let leds = lensed.lighting().leds.len();
+        (lensed.config.clone(), leds, 0.0, 0, Vec::new(), Vec::new())
+    };
     let mut unconstrained = unconstrained_values(&values);
     unconstrained.push(
         "paint.colour, paint.diffuse: an empty frame shows the LEDs' light times the paint's; \
@@ -131,7 +286,7 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
         ),
     }
     let contacts = match &options.contacts {
-        Some(path) => {
+        Some(path) if options.fit.imprint => {
             progress("fitting the imprint to the frames with contacts");
             let sensor = Sensor::from_config(options.start.name.clone(), config.clone())?;
             let fit = contacts::fit(&sensor, &frames, &circle, path)?;
@@ -139,6 +294,7 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
             values.extend(fit.values.iter().cloned());
             Some(fit)
         }
+        Some(_) => None,
         None => {
             unconstrained.push(
                 "elastomer.blend_mm, elastomer.drape_mm, elastomer.bulge: empty frames show no \
@@ -163,11 +319,13 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
         unconstrained,
         empty: mean_image(&frames),
         frames: frames.count,
-        fit_cost: fitted.fit.cost,
-        fit_iterations: fitted.fit.iterations,
-        leds: model.leds,
-        starts: fitted.starts,
+        fit_cost,
+        fit_iterations,
+        leds,
+        starts,
         contacts,
+        at_bounds,
+        fit: options.fit,
     })
 }
 
@@ -180,16 +338,25 @@ fn fit_light(
     frames: &EmptyFrames,
     circle: &ImageCircle,
 ) -> Result<fit::EmptyFit> {
-    let counts: Vec<usize> = if options.leds == 0 {
-        AUTO_LEDS.collect()
-    } else {
-        vec![options.leds]
+    let listed = listed_leds(lensed);
+    let kind = options
+        .led_kind
+        .or(listed.map(|(kind, _)| kind))
+        .unwrap_or(LedKindName::Point);
+    let own = listed.filter(|&(k, _)| k == kind).map(|(_, n)| n);
+    let counts: Vec<usize> = match (options.leds, own) {
+        (0, Some(n)) => vec![n],
+        (0, None) => AUTO_LEDS.collect(),
+        (n, _) => vec![n],
     };
     let models: Vec<Model> = counts
         .iter()
         .map(|&leds| Model {
             start: lensed.clone(),
             leds,
+            kind,
+            camera: options.fit.camera,
+            geometry: options.fit.geometry,
         })
         .collect();
     let fine = sample(lensed, frames, circle, options.samples);
@@ -204,16 +371,74 @@ fn fit_light(
             ),
         });
     }
-    let rotations: Vec<f64> = (0..options.starts.max(1))
-        .map(|i| 360.0 * i as f64 / options.starts.max(1) as f64)
+    // LEDs the start sensor lists start where it puts them; a ring is tried turned.
+    let turns = if own.is_some_and(|n| counts == [n]) {
+        1
+    } else {
+        options.starts.max(1)
+    };
+    let rotations: Vec<f64> = (0..turns)
+        .map(|i| 360.0 * i as f64 / turns as f64)
         .collect();
     Ok(fit::fit_empty(&models, &coarse, &fine, &rotations, 200))
+}
+
+/// The kind and number of the LEDs the sensor file lists (`[[leds]]`, all of one kind), or
+/// `None` for the ring or a mixed list.
+fn listed_leds(sensor: &Sensor) -> Option<(LedKindName, usize)> {
+    let crate::sensor::Leds::List(list) = &sensor.config.leds else {
+        return None;
+    };
+    let kind = list.first()?.kind;
+    list.iter()
+        .all(|l| l.kind == kind)
+        .then_some((kind, list.len()))
+}
+
+/// The fitted values that ended on their box's edge.
+fn at_bounds(fitted: &fit::EmptyFit) -> Vec<AtBound> {
+    let bounds = fitted.model.bounds();
+    fitted
+        .model
+        .names()
+        .into_iter()
+        .zip(&fitted.params)
+        .zip(bounds)
+        .filter_map(|((name, &value), b)| {
+            let tol = 1e-6 * (b.hi - b.lo).abs().max(1e-9);
+            let side = if value <= b.lo + tol {
+                "lower"
+            } else if value >= b.hi - tol {
+                "upper"
+            } else {
+                return None;
+            };
+            Some(AtBound { name, value, side })
+        })
+        .collect()
+}
+
+/// The start sensor's own lens, held: the frames must be its size.
+fn held_lens(start: &Sensor, frames: &EmptyFrames) -> Result<Sensor> {
+    let f = &frames.mean;
+    if (f.width, f.height) != (start.width, start.height) {
+        return Err(GeltipError::InvalidImage {
+            path: f.path.clone(),
+            reason: format!(
+                "is {}x{} but the sensor's lens is held (--fit without lens) for {}x{} images",
+                f.width, f.height, start.width, start.height
+            ),
+        });
+    }
+    Ok(start.clone())
 }
 
 /// The light's fitted values, named as the model names them, with their standard errors.
 fn light_values(fitted: &fit::EmptyFit) -> Vec<Value> {
     let errors = fitted.fit.standard_errors();
-    model::names(fitted.model.leds)
+    fitted
+        .model
+        .names()
         .into_iter()
         .zip(&fitted.params)
         .zip(errors)

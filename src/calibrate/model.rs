@@ -1,54 +1,46 @@
 //! The empty finger's picture as a function of the values calibration fits: each LED's
-//! place, colour, spread and fall-off, the ambient light, the paint's shine, the camera's
-//! vignetting and the finger's length (where the hemisphere meets the cylinder). It is the
-//! renderer's own light model ([`crate::render::leds::shade`]), evaluated at sampled
+//! place, colour and spread (point LEDs: height, distance from the axis, spread, fall-off;
+//! gel LEDs: their azimuth, and the band all of them share), the ambient light, the paint's
+//! shine (point LEDs), the camera's vignetting, colour matrix and gamma, and, when asked,
+//! the finger's length. It is the renderer's own light model
+//! ([`crate::render::leds::shade`], [`crate::render::leds::record`]) evaluated at sampled
 //! pixels, so the fitted values mean in `sensor.toml` what they meant while fitting.
 
 use crate::finger::Finger;
 use crate::render::camera::SkinHit;
-use crate::render::leds;
-use crate::sensor::{Led, LedConfig, Leds, Lighting, Sensor, SensorConfig};
+use crate::render::leds::{self, GelPlace};
+use crate::sensor::{
+    CameraConfig, GelSpread, Led, LedConfig, LedKind, LedKindName, Leds, Lighting, Sensor,
+    SensorConfig,
+};
 use glam::{DVec2, DVec3};
 
 use super::solve::Bound;
 
-/// Values per LED: azimuth (deg), z (mm), distance from the axis (mm), colour (RGB),
+/// Values per point LED: azimuth (deg), z (mm), distance from the axis (mm), colour (RGB),
 /// spread, fall-off (mm).
-pub const PER_LED: usize = 8;
-/// Values after the LEDs: ambient (RGB), specular, shininess, vignetting (a, b), the
-/// cylinder's length (mm).
-pub const GLOBAL: usize = 7;
+pub const PER_POINT_LED: usize = 8;
+/// Values per gel LED: azimuth (deg), colour (RGB).
+pub const PER_GEL_LED: usize = 4;
 
-/// What each value is called in the report, by index.
-pub fn names(leds: usize) -> Vec<String> {
-    let mut out = Vec::new();
-    for i in 0..leds {
-        for what in [
-            "azimuth_deg",
-            "z_mm",
-            "radius_mm",
-            "colour[0]",
-            "colour[1]",
-            "colour[2]",
-            "spread",
-            "falloff_mm",
-        ] {
-            out.push(format!("leds[{i}].{what}"));
-        }
-    }
-    for what in [
-        "light.ambient[0]",
-        "light.ambient[1]",
-        "light.ambient[2]",
-        "paint.specular",
-        "paint.shininess",
-        "light.vignetting[0]",
-        "light.vignetting[1]",
-        "finger.cylinder_length_mm",
-    ] {
-        out.push(what.to_string());
-    }
-    out
+/// Where each group of values sits in a parameter vector: what a [`Model`] fits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    pub per_led: usize,
+    /// Ambient light (RGB).
+    pub ambient: usize,
+    /// Vignetting a, b.
+    pub vignetting: usize,
+    /// Paint specular and shininess (point LEDs only: gel light has no highlight).
+    pub shine: Option<usize>,
+    /// The gel LEDs' shared band: width (mm), widening, attenuation (mm). Their height is
+    /// held: it only trades with the width and the colours' scale.
+    pub band: Option<usize>,
+    /// The camera's colour matrix off its diagonal (6, by row) and its gamma (3).
+    pub camera: Option<usize>,
+    /// The cylinder's length (mm).
+    pub length: Option<usize>,
+    pub len: usize,
 }
 
 /// The pixels a fit compares: where each sits and which ray it casts.
@@ -61,6 +53,9 @@ pub struct Samples {
     /// Each pixel's vignetting x: its distance from the principal point over the image
     /// circle's radius.
     pub radial: Vec<f64>,
+    /// Where each ray meets the start sensor's finger, and that place for the gel's light:
+    /// what every prediction reuses while the finger is held.
+    pub hits: Vec<Option<(SkinHit, GelPlace)>>,
 }
 
 impl Samples {
@@ -71,6 +66,7 @@ impl Samples {
             rays: Vec::new(),
             observed: Vec::new(),
             radial: Vec::new(),
+            hits: Vec::new(),
         };
         let max_rho = sensor.lens.max_rho();
         for &(p, obs) in pixels {
@@ -79,6 +75,7 @@ impl Samples {
                 out.rays.push(ray);
                 out.observed.push(obs);
                 out.radial.push((p - sensor.principal).length() / max_rho);
+                out.hits.push(hit_on(&sensor.finger, ray));
             }
         }
         out
@@ -93,11 +90,17 @@ impl Samples {
     }
 }
 
-/// The model: the start sensor (everything calibration does not fit) and how many LEDs.
+/// The model: the start sensor (everything calibration does not fit), how many LEDs of
+/// which kind, and which of the camera and the finger's length are fitted too.
 #[derive(Debug, Clone)]
 pub struct Model {
     pub start: Sensor,
     pub leds: usize,
+    pub kind: LedKindName,
+    /// Fit the camera's colour matrix and gamma (else the start's are held).
+    pub camera: bool,
+    /// Fit the finger's length (else the start's is held).
+    pub geometry: bool,
 }
 
 /// The values of `params` as the renderer's light, paint and finger.
@@ -109,121 +112,349 @@ pub struct Decoded {
 }
 
 impl Model {
+    /// A model of `leds` point LEDs with the camera and the finger held: what calibration
+    /// fitted before it knew other kinds.
+    pub fn point(start: Sensor, leds: usize) -> Model {
+        Model {
+            start,
+            leds,
+            kind: LedKindName::Point,
+            camera: false,
+            geometry: false,
+        }
+    }
+
+    pub fn layout(&self) -> Layout {
+        let per_led = match self.kind {
+            LedKindName::Point => PER_POINT_LED,
+            LedKindName::Gel => PER_GEL_LED,
+        };
+        let mut at = self.leds * per_led;
+        let mut take = |n: usize| {
+            let i = at;
+            at += n;
+            i
+        };
+        let ambient = take(3);
+        let vignetting = take(2);
+        let shine = (self.kind == LedKindName::Point).then(|| take(2));
+        let band = (self.kind == LedKindName::Gel).then(|| take(3));
+        let camera = self.camera.then(|| take(9));
+        let length = self.geometry.then(|| take(1));
+        Layout {
+            per_led,
+            ambient,
+            vignetting,
+            shine,
+            band,
+            camera,
+            length,
+            len: at,
+        }
+    }
+
     pub fn len(&self) -> usize {
-        self.leds * PER_LED + GLOBAL
+        self.layout().len
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
+    /// What each value is called in the report, by index.
+    pub fn names(&self) -> Vec<String> {
+        let l = self.layout();
+        let mut out = Vec::with_capacity(l.len);
+        let per_led: &[&str] = match self.kind {
+            LedKindName::Point => &[
+                "azimuth_deg",
+                "z_mm",
+                "radius_mm",
+                "colour[0]",
+                "colour[1]",
+                "colour[2]",
+                "spread",
+                "falloff_mm",
+            ],
+            LedKindName::Gel => &["azimuth_deg", "colour[0]", "colour[1]", "colour[2]"],
+        };
+        for i in 0..self.leds {
+            out.extend(per_led.iter().map(|what| format!("leds[{i}].{what}")));
+        }
+        out.extend(
+            [
+                "light.ambient[0]",
+                "light.ambient[1]",
+                "light.ambient[2]",
+                "light.vignetting[0]",
+                "light.vignetting[1]",
+            ]
+            .map(String::from),
+        );
+        if l.shine.is_some() {
+            out.extend(["paint.specular", "paint.shininess"].map(String::from));
+        }
+        if l.band.is_some() {
+            out.extend(
+                [
+                    "leds[*].width_mm",
+                    "leds[*].widening",
+                    "leds[*].attenuation_mm",
+                ]
+                .map(String::from),
+            );
+        }
+        if l.camera.is_some() {
+            for (i, j) in OFF_DIAGONAL {
+                out.push(format!("camera.colour_matrix[{i}][{j}]"));
+            }
+            out.extend((0..3).map(|k| format!("camera.gamma[{k}]")));
+        }
+        if l.length.is_some() {
+            out.push("finger.cylinder_length_mm".to_string());
+        }
+        out
+    }
+
     /// Each value's box and finite-difference step.
     pub fn bounds(&self) -> Vec<Bound> {
         let f = &self.start.finger;
+        let l = self.layout();
         let b = |lo: f64, hi: f64, step: f64| Bound { lo, hi, step };
-        let mut out = Vec::with_capacity(self.len());
+        let mut out = Vec::with_capacity(l.len);
         // The boxes keep the model physical and every fitted sensor valid: LEDs at the
         // finger's base, inside it, below the hemisphere (z < half the radius, the finger at
         // least a radius long); a fall-off no shorter than a millimetre (shorter ones only
         // trade the LED's brightness for its distance); a paint that shines at most twice
         // as much as it scatters, in a lobe no wider than cos^4; vignetting whose gain stays
-        // above 0.01 across the circle (1 + a x^2 + b x^4 with a >= -0.9, b >= -0.09).
+        // above 0.01 across the circle (1 + a x^2 + b x^4 with a >= -0.9, b >= -0.09); a
+        // gel band at least 0.3 mm wide that fades over at least a millimetre; a camera
+        // whose channels mix by at most their own size and whose gamma is 1 to 5.
         for _ in 0..self.leds {
-            out.extend([
-                b(-1e4, 1e4, 1e-3),
-                b(-4.0 * f.radius, 0.5 * f.radius, 1e-4),
-                b(0.0, f.radius * 0.999, 1e-4),
-                b(0.0, 1e3, 1e-6),
-                b(0.0, 1e3, 1e-6),
-                b(0.0, 1e3, 1e-6),
-                b(0.0, 40.0, 1e-4),
-                b(1.0, 500.0, 1e-3),
-            ]);
+            match self.kind {
+                LedKindName::Point => out.extend([
+                    b(-1e4, 1e4, 1e-3),
+                    b(-4.0 * f.radius, 0.5 * f.radius, 1e-4),
+                    b(0.0, f.radius * 0.999, 1e-4),
+                    b(0.0, 1e3, 1e-6),
+                    b(0.0, 1e3, 1e-6),
+                    b(0.0, 1e3, 1e-6),
+                    b(0.0, 40.0, 1e-4),
+                    b(1.0, 500.0, 1e-3),
+                ]),
+                LedKindName::Gel => out.extend([
+                    b(-1e4, 1e4, 1e-3),
+                    b(0.0, 1e3, 1e-6),
+                    b(0.0, 1e3, 1e-6),
+                    b(0.0, 1e3, 1e-6),
+                ]),
+            }
         }
         out.extend([
             b(0.0, 50.0, 1e-6),
             b(0.0, 50.0, 1e-6),
             b(0.0, 50.0, 1e-6),
-            b(0.0, 2.0 * self.start.config.paint.diffuse, 1e-5),
-            b(4.0, 200.0, 1e-3),
             b(-0.9, 3.0, 1e-5),
             b(-0.09, 3.0, 1e-5),
-            b(f.radius, f.radius * 8.0, 1e-4),
         ]);
+        if l.shine.is_some() {
+            out.extend([
+                b(0.0, 2.0 * self.start.config.paint.diffuse, 1e-5),
+                b(4.0, 200.0, 1e-3),
+            ]);
+        }
+        if l.band.is_some() {
+            out.extend([
+                b(0.3, 4.0 * f.radius, 1e-4),
+                b(0.0, 5.0, 1e-5),
+                b(1.0, 1e3, 1e-3),
+            ]);
+        }
+        if l.camera.is_some() {
+            out.extend((0..6).map(|_| b(-1.0, 1.0, 1e-5)));
+            out.extend((0..3).map(|_| b(1.0, 5.0, 1e-5)));
+        }
+        if l.length.is_some() {
+            out.push(b(f.radius, f.radius * 8.0, 1e-4));
+        }
         out
     }
 
-    /// The start sensor's values (its LEDs when it has `leds` of them, else a ring at
-    /// `ring_azimuth`), as a parameter vector.
+    /// The start sensor's values as a parameter vector: its LEDs when it has `leds` of this
+    /// kind (turned by `ring_azimuth_deg`), else a ring starting at `ring_azimuth_deg`.
     pub fn initial(&self, ring_azimuth_deg: f64) -> Vec<f64> {
         let s = &self.start;
         let light = s.lighting();
         let paint = &s.config.paint;
         let ring = crate::sensor::lighting::ring_radius(s.finger.radius, s.finger.shell_thickness);
+        let own: Vec<&Led> = light
+            .leds
+            .iter()
+            .filter(|l| kind_name(l.kind) == self.kind)
+            .collect();
+        let keep_own = own.len() == self.leds;
         let mut p = Vec::with_capacity(self.len());
+        let mut band = GelSpread::DEFAULT;
         for i in 0..self.leds {
-            let led = light.leds.get(i).copied().unwrap_or(Led {
-                position: DVec3::new(0.0, 0.0, -2.0),
-                colour: DVec3::splat(0.5),
-                intensity: 2.0,
-                spread: 2.0,
-                falloff_mm: 10.0,
-            });
-            let azimuth = ring_azimuth_deg + 360.0 * i as f64 / self.leds as f64;
+            let led = if keep_own {
+                *own[i]
+            } else {
+                Led {
+                    position: DVec3::new(0.0, 0.0, -2.0),
+                    colour: DVec3::splat(0.5),
+                    intensity: 2.0,
+                    spread: 2.0,
+                    falloff_mm: 10.0,
+                    kind: LedKind::Point,
+                }
+            };
+            let azimuth = if keep_own {
+                led.position.y.atan2(led.position.x).to_degrees() + ring_azimuth_deg
+            } else {
+                ring_azimuth_deg + 360.0 * i as f64 / self.leds as f64
+            };
             let c = led.colour * led.intensity;
-            p.extend([
-                azimuth,
-                led.position.z,
-                ring,
-                c.x,
-                c.y,
-                c.z,
-                led.spread,
-                led.falloff_mm,
-            ]);
+            match self.kind {
+                LedKindName::Point => p.extend([
+                    azimuth,
+                    led.position.z,
+                    ring,
+                    c.x,
+                    c.y,
+                    c.z,
+                    led.spread,
+                    led.falloff_mm,
+                ]),
+                LedKindName::Gel => {
+                    if let LedKind::Gel(b) = led.kind {
+                        band = b;
+                    }
+                    p.extend([azimuth, c.x, c.y, c.z]);
+                }
+            }
         }
         p.extend([
             light.ambient.x,
             light.ambient.y,
             light.ambient.z,
-            paint.specular,
-            paint.shininess,
-            0.0,
-            0.0,
-            s.finger.cylinder_length,
+            light.vignetting[0],
+            light.vignetting[1],
         ]);
+        let l = self.layout();
+        if l.shine.is_some() {
+            p.extend([paint.specular, paint.shininess]);
+        }
+        if l.band.is_some() {
+            p.extend([band.width_mm, band.widening, band.attenuation_mm]);
+        }
+        if l.camera.is_some() {
+            let cam = &s.config.camera;
+            p.extend(OFF_DIAGONAL.map(|(i, j)| cam.colour_matrix[i][j]));
+            p.extend(cam.gamma);
+        }
+        if l.length.is_some() {
+            p.push(s.finger.cylinder_length);
+        }
         p
     }
 
     pub fn decode(&self, p: &[f64]) -> Decoded {
+        let l = self.layout();
+        let start_paint = &self.start.config.paint;
+        let (specular, shininess) = match l.shine {
+            Some(i) => (p[i], p[i + 1]),
+            None => (start_paint.specular, start_paint.shininess),
+        };
+        let finger = Finger {
+            cylinder_length: l.length.map_or(self.start.finger.cylinder_length, |i| p[i]),
+            ..self.start.finger
+        };
+        let ring = crate::sensor::lighting::ring_radius(finger.radius, finger.shell_thickness);
+        let band = l.band.map(|i| {
+            (
+                GelSpread {
+                    width_mm: p[i],
+                    widening: p[i + 1],
+                    attenuation_mm: p[i + 2],
+                    relief: self.start_relief(),
+                },
+                self.start_gel_z(),
+            )
+        });
         let leds = (0..self.leds)
             .map(|i| {
-                let v = &p[i * PER_LED..(i + 1) * PER_LED];
+                let v = &p[i * l.per_led..(i + 1) * l.per_led];
                 let a = v[0].to_radians();
-                Led {
-                    position: DVec3::new(v[2] * a.cos(), v[2] * a.sin(), v[1]),
-                    colour: DVec3::new(v[3], v[4], v[5]),
-                    intensity: 1.0,
-                    spread: v[6],
-                    falloff_mm: v[7],
+                match (self.kind, band) {
+                    (LedKindName::Gel, Some((band, z))) => Led {
+                        position: DVec3::new(ring * a.cos(), ring * a.sin(), z),
+                        colour: DVec3::new(v[1], v[2], v[3]),
+                        intensity: 1.0,
+                        spread: 0.0,
+                        falloff_mm: 1.0,
+                        kind: LedKind::Gel(band),
+                    },
+                    _ => Led {
+                        position: DVec3::new(v[2] * a.cos(), v[2] * a.sin(), v[1]),
+                        colour: DVec3::new(v[3], v[4], v[5]),
+                        intensity: 1.0,
+                        spread: v[6],
+                        falloff_mm: v[7],
+                        kind: LedKind::Point,
+                    },
                 }
             })
             .collect();
-        let g = &p[self.leds * PER_LED..];
+        let camera = match l.camera {
+            Some(i) => {
+                let mut c = CameraConfig::default();
+                for (k, (r, col)) in OFF_DIAGONAL.iter().enumerate() {
+                    c.colour_matrix[*r][*col] = p[i + k];
+                }
+                c.gamma = [p[i + 6], p[i + 7], p[i + 8]];
+                c
+            }
+            None => self.start.config.camera,
+        };
+        let a = l.ambient;
+        let v = l.vignetting;
         Decoded {
             lighting: Lighting {
                 leds,
-                ambient: DVec3::new(g[0], g[1], g[2]),
+                ambient: DVec3::new(p[a], p[a + 1], p[a + 2]),
                 paint_colour: DVec3::ONE,
-                vignetting: [g[5], g[6]],
+                vignetting: [p[v], p[v + 1]],
+                finger,
+                camera,
             },
-            specular: g[3],
-            shininess: g[4],
-            finger: Finger {
-                cylinder_length: g[7],
-                ..self.start.finger
-            },
+            specular,
+            shininess,
+            finger,
         }
+    }
+
+    /// The height of the start sensor's first gel LED (the ring's default without one).
+    fn start_gel_z(&self) -> f64 {
+        self.start
+            .lighting()
+            .leds
+            .iter()
+            .find(|l| matches!(l.kind, LedKind::Gel(_)))
+            .map_or(crate::sensor::LedsConfig::default().z_mm, |l| l.position.z)
+    }
+
+    /// The relief of the start sensor's gel LEDs (an empty frame cannot show it: the
+    /// undeformed skin runs along the light).
+    fn start_relief(&self) -> f64 {
+        self.start
+            .lighting()
+            .leds
+            .iter()
+            .find_map(|l| match l.kind {
+                LedKind::Gel(b) => Some(b.relief),
+                LedKind::Point => None,
+            })
+            .unwrap_or(GelSpread::DEFAULT.relief)
     }
 
     /// The predicted 8-bit colour of every sample, before clipping at 255 (so a fit can see
@@ -233,28 +464,32 @@ impl Model {
         let mut paint = self.start.config.paint.clone();
         paint.specular = d.specular;
         paint.shininess = d.shininess;
+        let camera = d.lighting.camera;
         samples
             .rays
             .iter()
             .zip(&samples.radial)
-            .map(|(&ray, &x)| match d.finger.surface_along(ray) {
-                Some(s) => {
-                    let hit = SkinHit {
-                        point: s.point,
-                        normal: s.normal,
-                        indentation: 0.0,
-                        ray,
-                    };
-                    let gain = d.lighting.vignette(x);
-                    let c = leds::shade(&d.lighting, &paint, &hit) * gain;
-                    c.to_array().map(|v| 255.0 * v.max(0.0).powf(1.0 / 2.2))
+            .zip(&samples.hits)
+            .map(|((&ray, &x), cached)| {
+                let hit = if self.geometry {
+                    hit_on(&d.finger, ray)
+                } else {
+                    *cached
+                };
+                match hit {
+                    Some((hit, place)) => {
+                        let gain = d.lighting.vignette(x);
+                        let light = leds::shade_at(&d.lighting, &paint, &hit, Some(&place));
+                        let c = camera.mix(light * gain);
+                        std::array::from_fn(|k| unclipped_level(c[k], camera.gamma[k]))
+                    }
+                    None => [0.0; 3],
                 }
-                None => [0.0; 3],
             })
             .collect()
     }
 
-    /// The sensor these values describe: the start sensor with its light, paint and
+    /// The sensor these values describe: the start sensor with its light, paint, camera and
     /// finger length replaced. Each LED's colour is written normalised to its brightest
     /// channel, that channel's value becoming its intensity.
     pub fn config(&self, p: &[f64]) -> SensorConfig {
@@ -266,29 +501,76 @@ impl Model {
         c.paint.colour = [1.0; 3];
         c.light.ambient = Some(d.lighting.ambient.to_array());
         c.light.vignetting = d.lighting.vignetting;
+        c.camera = d.lighting.camera;
         c.leds = Leds::List(
-            (0..self.leds)
-                .map(|i| {
-                    let v = &p[i * PER_LED..(i + 1) * PER_LED];
-                    let colour = [v[3], v[4], v[5]];
+            d.lighting
+                .leds
+                .iter()
+                .map(|led| {
+                    let colour = led.colour.to_array();
                     let peak = colour.iter().copied().fold(0.0, f64::max);
                     let (colour, intensity) = if peak > 0.0 {
                         (colour.map(|c| c / peak), peak)
                     } else {
                         ([1.0; 3], 0.0)
                     };
-                    LedConfig {
+                    let azimuth = led.position.y.atan2(led.position.x).to_degrees();
+                    let base = LedConfig {
                         colour,
-                        azimuth_deg: v[0].rem_euclid(360.0),
-                        z_mm: v[1],
-                        radius_mm: Some(v[2]),
+                        azimuth_deg: azimuth.rem_euclid(360.0),
+                        z_mm: led.position.z,
                         intensity,
-                        spread: v[6],
-                        falloff_mm: v[7],
+                        ..LedConfig::new(colour, 0.0)
+                    };
+                    match led.kind {
+                        LedKind::Point => LedConfig {
+                            radius_mm: Some(led.position.truncate().length()),
+                            spread: led.spread,
+                            falloff_mm: led.falloff_mm,
+                            ..base
+                        },
+                        LedKind::Gel(b) => LedConfig {
+                            kind: LedKindName::Gel,
+                            width_mm: Some(b.width_mm),
+                            widening: Some(b.widening),
+                            attenuation_mm: Some(b.attenuation_mm),
+                            relief: Some(b.relief),
+                            ..base
+                        },
                     }
                 })
                 .collect(),
         );
         c
     }
+}
+
+/// The colour matrix's entries off its diagonal, in the order a parameter vector holds them
+/// (its diagonal is held at 1: each channel's own scale is the LEDs' colours').
+pub const OFF_DIAGONAL: [(usize, usize); 6] = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)];
+
+/// Where `ray` meets the undeformed `finger`, as shading takes it.
+pub fn hit_on(finger: &Finger, ray: DVec3) -> Option<(SkinHit, GelPlace)> {
+    let s = finger.surface_along(ray)?;
+    let hit = SkinHit {
+        point: s.point,
+        normal: s.normal,
+        indentation: 0.0,
+        ray,
+    };
+    Some((hit, GelPlace::of(finger, s.point, s.normal)))
+}
+
+/// An LED's kind by name.
+pub fn kind_name(kind: LedKind) -> LedKindName {
+    match kind {
+        LedKind::Point => LedKindName::Point,
+        LedKind::Gel(_) => LedKindName::Gel,
+    }
+}
+
+/// 255 x^(1/gamma) of a linear value, not clipped above (a fit sees how far past full scale
+/// a prediction lies).
+fn unclipped_level(linear: f64, gamma: f64) -> f64 {
+    255.0 * linear.max(0.0).powf(1.0 / gamma)
 }

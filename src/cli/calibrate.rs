@@ -4,9 +4,9 @@
 use super::under_flags;
 use anyhow::Result;
 use clap::Args;
-use geltip::calibrate::Options;
+use geltip::calibrate::{FitSet, Options};
 use geltip::jobs::calibrate;
-use geltip::sensor::Sensor;
+use geltip::sensor::{LedKindName, Sensor};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -16,7 +16,7 @@ pub struct CalibrateArgs {
     /// of view, and every value the frames do not fit.
     #[arg(long, default_value = "paper")]
     sensor: String,
-    /// A frame of the empty finger (PNG); repeat for several frames of the same camera (their
+    /// A frame of the empty finger (PNG or JPEG); repeat for several frames of the same camera (their
     /// spread gives the noise).
     #[arg(long, required = true)]
     empty: Vec<PathBuf>,
@@ -25,10 +25,20 @@ pub struct CalibrateArgs {
     /// elastomer values.
     #[arg(long)]
     contacts: Option<PathBuf>,
-    /// How many LEDs to fit; 0 tries 3 to 6 and keeps the fewest that explain the frame
-    /// about as well as more would.
+    /// How many LEDs to fit; 0 takes the start sensor's listed LEDs ([[leds]]), or for a
+    /// ring tries 3 to 6 and keeps the fewest that explain the frame about as well as more
+    /// would.
     #[arg(long, default_value_t = 0)]
     leds: usize,
+    /// Which kind of LED to fit: point (straight light) or gel (carried up the gel from the
+    /// base); by default the start sensor's listed LEDs' kind, point for a ring.
+    #[arg(long = "led-kind", value_parser = ["point", "gel"])]
+    led_kind: Option<String>,
+    /// What to fit, comma-separated, of lens (from the image circle), light, camera (colour
+    /// matrix and gamma), geometry (the finger's length) and imprint (from --contacts); the
+    /// rest is held at the start sensor's values.
+    #[arg(long, default_value = "lens,light,camera,imprint")]
+    fit: String,
     /// Starting rotations of the LEDs tried (more find a better fit more often, and take
     /// longer).
     #[arg(long, default_value_t = geltip::calibrate::DEFAULT_STARTS)]
@@ -46,6 +56,11 @@ pub fn calibrate(args: CalibrateArgs) -> Result<()> {
     options.contacts = args.contacts;
     options.leds = args.leds;
     options.starts = args.starts;
+    options.fit = FitSet::parse(&args.fit).map_err(under_flags(&[("fit", "--fit")]))?;
+    options.led_kind = args.led_kind.as_deref().map(|k| match k {
+        "gel" => LedKindName::Gel,
+        _ => LedKindName::Point,
+    });
     let outcome = calibrate::run(&options, &args.out, &|stage| eprintln!("{stage}..."))
         .map_err(under_flags(&[]))?;
     let judged = &outcome.judged;
@@ -61,6 +76,7 @@ pub fn calibrate(args: CalibrateArgs) -> Result<()> {
             },
             "psnr_db": {"before": round(judged.before.psnr_db), "after": round(judged.after.psnr_db)},
             "ssim": {"before": round(judged.before.ssim), "after": round(judged.after.ssim)},
+            "at_bounds": c.at_bounds.iter().map(|b| &b.name).collect::<Vec<_>>(),
             "seconds": round(judged.seconds),
         })
     );

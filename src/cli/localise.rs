@@ -10,14 +10,14 @@ use std::path::PathBuf;
 pub struct LocaliseArgs {
     #[arg(long)]
     sensor: String,
-    /// The no-contact image of the same sensor.
+    /// The no-contact image of the same sensor (PNG or JPEG).
     #[arg(long)]
     reference: PathBuf,
     /// paper (the paper's detector) or surface (geltip's: noise-relative threshold,
     /// averaging on the finger's surface).
     #[arg(long, default_value = "surface")]
     method: String,
-    /// The image with the contact.
+    /// The image with the contact (PNG or JPEG).
     image: PathBuf,
 }
 

@@ -193,6 +193,12 @@ fn report_json(
             "std_error": finite(v.std_error),
         })).collect::<Vec<_>>(),
         "unconstrained": c.unconstrained,
+        "fitted": c.fit.names(),
+        "at_bounds": c.at_bounds.iter().map(|b| json!({
+            "name": b.name,
+            "value": b.value,
+            "bound": b.side,
+        })).collect::<Vec<_>>(),
         "fit": {
             "robust_cost": c.fit_cost,
             "iterations": c.fit_iterations,

@@ -193,7 +193,7 @@ pub fn check_sizes(reference: &RgbImage, frame: &RgbImage, sensor: Option<&Senso
     Ok(())
 }
 
-/// Reads an image file (PNG) as 8-bit RGB; other pixel formats are converted (alpha dropped,
+/// Reads an image file (PNG or JPEG) as 8-bit RGB; other pixel formats are converted (alpha dropped,
 /// 16-bit scaled). An unreadable file is an `InvalidImage` error.
 pub fn load_image(path: impl AsRef<Path>) -> Result<RgbImage> {
     let path = path.as_ref();

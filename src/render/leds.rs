@@ -1,10 +1,13 @@
-//! Stage 4, LEDs: point lights at the base of the finger (the paper's ring of three, or any
-//! list of up to eight) light the painted skin from the inside (diffuse + Blinn-Phong
-//! specular, inverse-square-like fall-off, ambient light, the paint's colour, vignetting);
-//! the result is gamma-encoded to 8 bits, with optional seeded sensor noise. CPU mirror of `shaders/leds.wgsl` (same names).
+//! Stage 4, LEDs: lights at the base of the finger (the paper's ring of three, or any list
+//! of up to sixteen) light the painted skin from the inside. A point LED shines straight at
+//! it (diffuse + Blinn-Phong specular, inverse-square-like fall-off); a gel LED's light is
+//! carried up the gel and glows in a band above it ([`gel_light`]). Then ambient light, the
+//! paint's colour, vignetting, the camera's colour matrix and gamma make 8 bits, with
+//! optional seeded sensor noise. CPU mirror of `shaders/shared/shading.wgsl` (same names).
 
 use super::camera::SkinHit;
-use crate::sensor::{Lighting, PaintConfig, Sensor};
+use crate::finger::Finger;
+use crate::sensor::{CameraConfig, GelSpread, LedKind, Lighting, PaintConfig, Sensor};
 use glam::{DVec2, DVec3};
 
 /// Relative emission of an LED towards unit direction `towards`: it shines up the finger.
@@ -18,11 +21,32 @@ pub fn emission(towards: DVec3, spread: f64) -> f64 {
 /// Linear radiance reaching the camera from a skin point, under the sensor's light resolved
 /// once ([`Sensor::lighting`]) for every pixel shaded.
 pub fn shade(light: &Lighting, paint: &PaintConfig, hit: &SkinHit) -> DVec3 {
+    let gel = light
+        .leds
+        .iter()
+        .any(|l| matches!(l.kind, LedKind::Gel(_)))
+        .then(|| GelPlace::of(&light.finger, hit.point, hit.normal));
+    shade_at(light, paint, hit, gel.as_ref())
+}
+
+/// [`shade`] with the hit's [`GelPlace`] already known (`None` when no LED is a gel LED).
+pub fn shade_at(
+    light: &Lighting,
+    paint: &PaintConfig,
+    hit: &SkinHit,
+    gel: Option<&GelPlace>,
+) -> DVec3 {
     // The paint faces the inside of the finger, where the camera and the LEDs are.
     let facing = -hit.normal;
     let view = -hit.ray;
     let mut colour = light.ambient;
     for led in &light.leds {
+        if let (LedKind::Gel(band), Some(place)) = (led.kind, gel) {
+            let azimuth = led.position.y.atan2(led.position.x);
+            let glow = gel_light(light.finger.radius, azimuth, led.position.z, &band, place);
+            colour += led.colour * (led.intensity * glow);
+            continue;
+        }
         let to_led = led.position - hit.point;
         let dist = to_led.length();
         let l = to_led / dist;
@@ -39,18 +63,97 @@ pub fn shade(light: &Lighting, paint: &PaintConfig, hit: &SkinHit) -> DVec3 {
     colour * light.paint_colour
 }
 
+/// Where a skin point lies for the gel's light: its azimuth about the axis, its latitude
+/// above the hemisphere's equator (0 on the cylinder), how far up the skin it is (its z on
+/// the cylinder, the hemisphere's centre's z plus the arc above the equator on the
+/// hemisphere) and how far its normal tilts up the finger.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GelPlace {
+    pub azimuth: f64,
+    pub cos_latitude: f64,
+    pub height: f64,
+    pub tilt_up: f64,
+}
+
+impl GelPlace {
+    pub fn of(finger: &Finger, point: DVec3, normal: DVec3) -> GelPlace {
+        let r = finger.radius;
+        let d = finger.cylinder_length;
+        let azimuth = point.y.atan2(point.x);
+        let (latitude, height) = if point.z > d {
+            let latitude = (point.z - d).atan2(point.x.hypot(point.y));
+            (latitude, d + r * latitude)
+        } else {
+            (0.0, point.z)
+        };
+        let (sin_lat, cos_lat) = latitude.sin_cos();
+        let (sin_az, cos_az) = azimuth.sin_cos();
+        let way_up = DVec3::new(-sin_lat * cos_az, -sin_lat * sin_az, cos_lat);
+        GelPlace {
+            azimuth,
+            cos_latitude: cos_lat,
+            height,
+            tilt_up: normal.dot(way_up),
+        }
+    }
+}
+
+/// How bright a gel LED at azimuth `led_azimuth` (radians) and height `led_z` makes the skin
+/// at `place`: a band up the finger above the LED, Gaussian across it (distance along the
+/// surface, `width_mm` wide at the LED, `widening` more per mm up), thinning as it widens and
+/// fading as exp(-s / attenuation_mm) with the distance s up the skin; times
+/// max(0, 1 + relief n.t), t the way up the finger, so a skin tilted against the light's
+/// path (an imprint's flank) brightens or darkens.
+pub fn gel_light(
+    radius: f64,
+    led_azimuth: f64,
+    led_z: f64,
+    band: &GelSpread,
+    place: &GelPlace,
+) -> f64 {
+    let up = (place.height - led_z).max(0.0);
+    let mut turn = place.azimuth - led_azimuth;
+    turn -= std::f64::consts::TAU * (turn / std::f64::consts::TAU).round();
+    let across = radius * turn * place.cos_latitude;
+    let width = band.width_mm + band.widening * up;
+    let g = across / width;
+    let glow = (-0.5 * g * g).exp() * (band.width_mm / width) * (-up / band.attenuation_mm).exp();
+    glow * (1.0 + band.relief * place.tilt_up).max(0.0)
+}
+
 /// The vignetting gain at `pixel`: [`Lighting::vignette`] at its distance from the principal
 /// point over the lens's image-circle radius.
 pub fn vignette(sensor: &Sensor, light: &Lighting, pixel: DVec2) -> f64 {
     light.vignette((pixel - sensor.principal).length() / sensor.lens.max_rho())
 }
 
-/// The 8-bit colour of `pixel` whose ray meets `hit`: shaded, vignetted, gamma-encoded.
+/// The 8-bit colour of `pixel` whose ray meets `hit`: shaded, vignetted, recorded by the
+/// camera.
 pub fn pixel_colour(sensor: &Sensor, light: &Lighting, pixel: DVec2, hit: &SkinHit) -> [u8; 3] {
     let gain = vignette(sensor, light, pixel);
-    (shade(light, &sensor.config.paint, hit) * gain)
-        .to_array()
-        .map(encode)
+    record(
+        &light.camera,
+        shade(light, &sensor.config.paint, hit) * gain,
+    )
+}
+
+/// The 8-bit values the camera records for linear light `c`: the plain gamma 2.2 of
+/// [`encode`] for the default camera, else its colour matrix and per-channel gamma.
+pub fn record(camera: &CameraConfig, c: DVec3) -> [u8; 3] {
+    if camera.is_default() {
+        return c.to_array().map(encode);
+    }
+    let mixed = camera.mix(c).to_array();
+    std::array::from_fn(|k| encode_gamma(mixed[k], camera.gamma[k]))
+}
+
+/// The 8-bit value of a linear channel under the camera's `gamma`, before rounding.
+pub fn level(linear: f64, gamma: f64) -> f64 {
+    linear.clamp(0.0, 1.0).powf(1.0 / gamma) * 255.0
+}
+
+fn encode_gamma(linear: f64, gamma: f64) -> u8 {
+    level(linear, gamma).round().clamp(0.0, 255.0) as u8
 }
 
 /// PCG hash (the same integer arithmetic runs in WGSL).

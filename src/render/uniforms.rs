@@ -4,7 +4,7 @@
 use super::contact::Footprint;
 use super::{ContactPose, HeightfieldGrid, Rect};
 use crate::object::Object;
-use crate::sensor::{Sensor, MAX_LEDS};
+use crate::sensor::{LedKind, Sensor, MAX_LEDS};
 use bytemuck::{Pod, Zeroable};
 
 /// WGSL `Sensor`: everything about the sensor that every stage reads.
@@ -50,11 +50,22 @@ pub struct SensorUniform {
     pub paint_colour: [f32; 4],
     /// Vignetting: x a, y b, z one over the image circle's radius (px); w unused.
     pub vignetting: [f32; 4],
-    /// Each LED's position (xyz; w unused), colour (xyz; w unused) and light: x intensity,
-    /// y spread, z falloff_mm (w unused). LEDs past `led_count` are zero.
+    /// Each LED's position (xyz; w 1 for a gel LED, 0 for a point LED), colour (xyz; w
+    /// unused), light (x intensity, y spread, z falloff_mm; w unused) and a gel LED's band
+    /// (x width_mm, y widening, z attenuation_mm, w relief). LEDs past `led_count` are zero.
     pub led_position: [[f32; 4]; MAX_LEDS],
     pub led_colour: [[f32; 4]; MAX_LEDS],
     pub led_light: [[f32; 4]; MAX_LEDS],
+    pub led_band: [[f32; 4]; MAX_LEDS],
+    /// The camera's colour matrix by row (xyz; w unused) and one over its gamma by channel
+    /// (xyz; w unused).
+    pub colour_matrix: [[f32; 4]; 3],
+    pub inverse_gamma: [f32; 4],
+    /// Whether any LED is a gel LED, and whether the camera is not the plain gamma 2.2
+    /// (pipeline constants GEL_LEDS and CAMERA_RESPONSE; the shaders do not read these).
+    pub gel_leds: u32,
+    pub camera_response: u32,
+    pub pad: [u32; 2],
     /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
     /// [`super::elastomer::blend_weights`].
     pub blend_weights: [[f32; 4]; BLEND_WEIGHTS],
@@ -64,7 +75,7 @@ pub struct SensorUniform {
 pub const BLEND_WEIGHTS: usize = super::elastomer::MAX_BLEND_TAPS as usize + 1;
 
 const _: () =
-    assert!(std::mem::size_of::<SensorUniform>() == 192 + 3 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
+    assert!(std::mem::size_of::<SensorUniform>() == 272 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -108,9 +119,13 @@ impl SensorUniform {
     pub fn new(sensor: &Sensor, grid: &HeightfieldGrid) -> Self {
         let c = &sensor.config;
         let light = sensor.lighting();
-        let mut leds = [[[0.0f32; 4]; MAX_LEDS]; 3];
+        let mut leds = [[[0.0f32; 4]; MAX_LEDS]; 4];
         for (i, l) in light.leds.iter().enumerate() {
-            leds[0][i] = vec4(l.position, 0.0);
+            let gel = match l.kind {
+                LedKind::Point => None,
+                LedKind::Gel(band) => Some(band),
+            };
+            leds[0][i] = vec4(l.position, if gel.is_some() { 1.0 } else { 0.0 });
             leds[1][i] = vec4(l.colour, 0.0);
             leds[2][i] = [
                 l.intensity as f32,
@@ -118,7 +133,17 @@ impl SensorUniform {
                 l.falloff_mm as f32,
                 0.0,
             ];
+            if let Some(b) = gel {
+                leds[3][i] = [
+                    b.width_mm as f32,
+                    b.widening as f32,
+                    b.attenuation_mm as f32,
+                    b.relief as f32,
+                ];
+            }
         }
+        let camera = &light.camera;
+        let row = |r: [f64; 3]| [r[0] as f32, r[1] as f32, r[2] as f32, 0.0];
         let noise = c.render.noise.rgb();
         let f = &sensor.finger;
         let kernel = super::elastomer::Kernel::for_config(c, grid);
@@ -174,6 +199,12 @@ impl SensorUniform {
             led_position: leds[0],
             led_colour: leds[1],
             led_light: leds[2],
+            led_band: leds[3],
+            colour_matrix: camera.colour_matrix.map(row),
+            inverse_gamma: row(camera.gamma.map(|g| 1.0 / g)),
+            gel_leds: light.leds.iter().any(|l| matches!(l.kind, LedKind::Gel(_))) as u32,
+            camera_response: !camera.is_default() as u32,
+            pad: [0; 2],
             blend_weights,
         }
     }
@@ -181,7 +212,7 @@ impl SensorUniform {
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
     /// fields that shape control flow, and the shading's exponents, fixed per sensor so the
     /// driver can fold the lens switch, unroll the loops and multiply whole powers out.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 9] {
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 11] {
         // Nested exactly as the shader steps them: the wide step twice the narrow one in f32.
         let nested = self.wide_step_mm == 2.0 * self.narrow_step_mm;
         [
@@ -201,6 +232,8 @@ impl SensorUniform {
                     1.0
                 },
             ),
+            ("GEL_LEDS", self.gel_leds as f64),
+            ("CAMERA_RESPONSE", self.camera_response as f64),
         ]
     }
 }

@@ -1,6 +1,6 @@
 //! The sensor file as people write it (TOML), loaded with serde and validated field by field.
 
-use super::lighting::{Leds, LightConfig, Noise};
+use super::lighting::{CameraConfig, Leds, LightConfig, Noise};
 use crate::error::{GeltipError, Result};
 use crate::lens::{Lens, LensModel};
 use serde::{Deserialize, Serialize};
@@ -49,11 +49,18 @@ pub struct ElastomerConfig {
     pub blend_mm: f64,
     /// The tightest radius (mm) the skin can bend to: past an object's edge the skin falls away
     /// on a circle of this radius instead of a cliff. At least the shell thickness, so that
-    /// even a full-depth press reaches back to the surface.
+    /// even a full-depth press reaches back to the surface; a file that leaves it out gets
+    /// [`default_drape_mm`] of its gel.
     pub drape_mm: f64,
     /// How much of the displaced gel bulges out around the imprint (0 = none): the bulge is
     /// this fraction of the difference between a blend twice as wide and the blend itself.
     pub bulge: f64,
+}
+
+/// The drape a sensor file gets when it gives none: 2 mm, or the gel's thickness when the gel
+/// is thicker (a thick gel bends no tighter than it is thick).
+pub fn default_drape_mm(shell_thickness_mm: f64) -> f64 {
+    ElastomerConfig::default().drape_mm.max(shell_thickness_mm)
 }
 
 impl Default for ElastomerConfig {
@@ -136,6 +143,8 @@ pub struct SensorConfig {
     pub leds: Leds,
     #[serde(default, skip_serializing_if = "LightConfig::is_default")]
     pub light: LightConfig,
+    #[serde(default, skip_serializing_if = "CameraConfig::is_default")]
+    pub camera: CameraConfig,
     #[serde(default)]
     pub paint: PaintConfig,
     #[serde(default)]
@@ -182,6 +191,15 @@ fn is_white(colour: &[f64; 3]) -> bool {
     *colour == [1.0; 3]
 }
 
+/// Whether the TOML text sets `elastomer.drape_mm` (the text already parsed once).
+fn drape_given(text: &str) -> bool {
+    text.parse::<toml::Table>().is_ok_and(|t| {
+        t.get("elastomer")
+            .and_then(|e| e.as_table())
+            .is_some_and(|e| e.contains_key("drape_mm"))
+    })
+}
+
 pub(super) fn non_negative(field: &str, v: f64) -> Result<()> {
     if !v.is_finite() || v < 0.0 {
         return Err(GeltipError::config(
@@ -219,6 +237,10 @@ impl SensorConfig {
                 reason: format!("{field}: {}", inner.message().trim().replace('\n', " ")),
             }
         })?;
+        let mut config = config;
+        if !drape_given(text) {
+            config.elastomer.drape_mm = default_drape_mm(config.finger.shell_thickness_mm);
+        }
         Ok(config)
     }
 
@@ -347,6 +369,7 @@ impl SensorConfig {
         let f = &self.finger;
         self.leds.validate(f.radius_mm, f.cylinder_length_mm)?;
         self.light.validate()?;
+        self.camera.validate()?;
         for (k, c) in self.paint.colour.iter().enumerate() {
             non_negative(&format!("paint.colour[{k}]"), *c)?;
         }

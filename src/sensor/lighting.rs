@@ -5,12 +5,13 @@
 
 use super::config::{finite_positive, non_negative};
 use crate::error::{GeltipError, Result};
+use crate::finger::Finger;
 use glam::DVec3;
 use serde::de::{self, MapAccess, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 
 /// The most LEDs a sensor may have (the GPU's uniform holds this many).
-pub const MAX_LEDS: usize = 8;
+pub const MAX_LEDS: usize = 16;
 
 /// LED colours of the ring: one red, one green and one blue LED, or three white ones.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -54,10 +55,32 @@ impl Default for LedsConfig {
     }
 }
 
+/// How an LED's light reaches the skin.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LedKindName {
+    /// Straight from the LED to the skin: a point light inside the finger.
+    #[default]
+    Point,
+    /// Into the gel at the base and carried up it (a light-pipe ring feeding a clear gel, as
+    /// in the AllSight): the skin glows in a band above the LED that widens and fades with
+    /// the distance along the finger.
+    Gel,
+}
+
+impl LedKindName {
+    fn is_point(&self) -> bool {
+        *self == LedKindName::Point
+    }
+}
+
 /// One LED of a `[[leds]]` list.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LedConfig {
+    /// `"point"` (default) or `"gel"`.
+    #[serde(default, skip_serializing_if = "LedKindName::is_point")]
+    pub kind: LedKindName,
     /// Linear RGB colour (each channel >= 0; multiplied by `intensity`).
     pub colour: [f64; 3],
     /// Angle about the finger's axis, degrees (0 is image +x, 90 image +y).
@@ -76,6 +99,21 @@ pub struct LedConfig {
     /// 1 / (1 + (dist / falloff)^2).
     #[serde(default = "default_led_falloff")]
     pub falloff_mm: f64,
+    /// A gel LED's band: its width across the finger at the LED's height (mm along the
+    /// surface, one standard deviation; default [`GelSpread::DEFAULT`]'s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width_mm: Option<f64>,
+    /// How much wider the band grows per mm up the finger.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub widening: Option<f64>,
+    /// The distance up the finger (mm) over which the gel's light falls to 1/e.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attenuation_mm: Option<f64>,
+    /// How strongly the skin's tilt against the light's path brightens or darkens it (what
+    /// makes an imprint visible in light that runs along the skin): the glow is multiplied
+    /// by max(0, 1 + relief n.t), n the skin's normal, t the way up the finger.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relief: Option<f64>,
 }
 
 impl LedConfig {
@@ -90,8 +128,57 @@ impl LedConfig {
             intensity: default_led_intensity(),
             spread: default_led_spread(),
             falloff_mm: default_led_falloff(),
+            kind: LedKindName::Point,
+            width_mm: None,
+            widening: None,
+            attenuation_mm: None,
+            relief: None,
         }
     }
+
+    /// A gel LED of `colour` at `azimuth_deg`, with the default band.
+    pub fn gel(colour: [f64; 3], azimuth_deg: f64) -> LedConfig {
+        LedConfig {
+            kind: LedKindName::Gel,
+            ..LedConfig::new(colour, azimuth_deg)
+        }
+    }
+
+    /// The band of a gel LED (its values or the defaults).
+    pub fn gel_spread(&self) -> GelSpread {
+        let d = GelSpread::DEFAULT;
+        GelSpread {
+            width_mm: self.width_mm.unwrap_or(d.width_mm),
+            widening: self.widening.unwrap_or(d.widening),
+            attenuation_mm: self.attenuation_mm.unwrap_or(d.attenuation_mm),
+            relief: self.relief.unwrap_or(d.relief),
+        }
+    }
+}
+
+/// The band of skin a gel LED lights ([`LedKindName::Gel`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GelSpread {
+    pub width_mm: f64,
+    pub widening: f64,
+    pub attenuation_mm: f64,
+    pub relief: f64,
+}
+
+impl GelSpread {
+    pub const DEFAULT: GelSpread = GelSpread {
+        width_mm: 3.0,
+        widening: 0.2,
+        attenuation_mm: 15.0,
+        relief: 1.0,
+    };
+}
+
+/// What kind of light an LED gives ([`LedKindName`]), resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LedKind {
+    Point,
+    Gel(GelSpread),
 }
 
 fn default_led_z() -> f64 {
@@ -208,6 +295,7 @@ pub struct Led {
     pub intensity: f64,
     pub spread: f64,
     pub falloff_mm: f64,
+    pub kind: LedKind,
 }
 
 /// A sensor's light, resolved from either form of the file: what shading needs.
@@ -219,6 +307,68 @@ pub struct Lighting {
     pub paint_colour: DVec3,
     /// 1 + a x^2 + b x^4 (see [`LightConfig::vignetting`]).
     pub vignetting: [f64; 2],
+    /// The finger the gel carries light along (its radius and the hemisphere's height).
+    pub finger: Finger,
+    /// How the camera turns light into pixel values.
+    pub camera: CameraConfig,
+}
+
+/// `[camera]`: how the camera turns the light reaching it into 8-bit values: a colour
+/// matrix (the camera's own mixing of its channels, off-diagonal terms negative in most
+/// cameras' colour correction) applied to the vignetted linear light, then each channel
+/// encoded as 255 x^(1/gamma).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraConfig {
+    /// Rows: output R, G, B from input (R, G, B).
+    pub colour_matrix: [[f64; 3]; 3],
+    pub gamma: [f64; 3],
+}
+
+impl Default for CameraConfig {
+    fn default() -> Self {
+        CameraConfig {
+            colour_matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            gamma: [2.2; 3],
+        }
+    }
+}
+
+impl CameraConfig {
+    /// Whether this is the default (no `[camera]` table): left out when a config is written,
+    /// and the renderer then takes its plain gamma-2.2 path.
+    pub fn is_default(&self) -> bool {
+        *self == CameraConfig::default()
+    }
+
+    /// The linear light `c` as the camera records it, before the gamma: mixed by the matrix.
+    pub fn mix(&self, c: DVec3) -> DVec3 {
+        let m = &self.colour_matrix;
+        DVec3::new(
+            m[0][0] * c.x + m[0][1] * c.y + m[0][2] * c.z,
+            m[1][0] * c.x + m[1][1] * c.y + m[1][2] * c.z,
+            m[2][0] * c.x + m[2][1] * c.y + m[2][2] * c.z,
+        )
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        for (i, row) in self.colour_matrix.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                finite(&format!("camera.colour_matrix[{i}][{j}]"), *v)?;
+            }
+        }
+        for (k, g) in self.gamma.iter().enumerate() {
+            let field = format!("camera.gamma[{k}]");
+            finite_positive(&field, *g)?;
+            if !(0.2..=5.0).contains(g) {
+                return Err(GeltipError::config(
+                    field,
+                    format!("must be between 0.2 and 5, got {g}"),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Lighting {
@@ -260,6 +410,7 @@ impl Leds {
                             intensity: c.intensity,
                             spread: c.spread,
                             falloff_mm: c.falloff_mm,
+                            kind: LedKind::Point,
                         }
                     })
                     .collect()
@@ -275,6 +426,10 @@ impl Leds {
                         intensity: l.intensity,
                         spread: l.spread,
                         falloff_mm: l.falloff_mm,
+                        kind: match l.kind {
+                            LedKindName::Point => LedKind::Point,
+                            LedKindName::Gel => LedKind::Gel(l.gel_spread()),
+                        },
                     }
                 })
                 .collect(),
@@ -328,6 +483,7 @@ impl Leds {
                     non_negative(&field("intensity"), l.intensity)?;
                     non_negative(&field("spread"), l.spread)?;
                     finite_positive(&field("falloff_mm"), l.falloff_mm)?;
+                    validate_gel(l, &field)?;
                 }
                 Ok(())
             }
@@ -392,6 +548,30 @@ fn finite(field: &str, v: f64) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// A gel LED's band; a point LED must not give one.
+fn validate_gel(l: &LedConfig, field: &dyn Fn(&str) -> String) -> Result<()> {
+    let given = [
+        ("width_mm", l.width_mm),
+        ("widening", l.widening),
+        ("attenuation_mm", l.attenuation_mm),
+        ("relief", l.relief),
+    ];
+    if l.kind == LedKindName::Point {
+        if let Some((name, _)) = given.iter().find(|(_, v)| v.is_some()) {
+            return Err(GeltipError::config(
+                field(name),
+                "only a gel LED (kind = \"gel\") has a band; a point LED takes spread and falloff_mm",
+            ));
+        }
+        return Ok(());
+    }
+    let g = l.gel_spread();
+    finite_positive(&field("width_mm"), g.width_mm)?;
+    non_negative(&field("widening"), g.widening)?;
+    finite_positive(&field("attenuation_mm"), g.attenuation_mm)?;
+    finite(&field("relief"), g.relief)
 }
 
 fn check_height(field: &str, z: f64, cylinder_length_mm: f64) -> Result<()> {

@@ -14,7 +14,8 @@ pub use config::{
     SensorConfig, MAX_FINGER_MM, MAX_IMAGE_SIDE,
 };
 pub use lighting::{
-    Led, LedColours, LedConfig, Leds, LedsConfig, LightConfig, Lighting, Noise, MAX_LEDS,
+    CameraConfig, GelSpread, Led, LedColours, LedConfig, LedKind, LedKindName, Leds, LedsConfig,
+    LightConfig, Lighting, Noise, MAX_LEDS,
 };
 
 use crate::error::{GeltipError, Result};
@@ -24,7 +25,7 @@ use glam::{DVec2, DVec3};
 use std::path::Path;
 
 /// The presets shipped in `assets/sensors/`, compiled in so the binary works from anywhere.
-pub const PRESETS: [(&str, &str); 4] = [
+pub const PRESETS: [(&str, &str); 5] = [
     ("paper", include_str!("../../assets/sensors/paper.toml")),
     (
         "webcam70",
@@ -32,6 +33,10 @@ pub const PRESETS: [(&str, &str); 4] = [
     ),
     ("tube13", include_str!("../../assets/sensors/tube13.toml")),
     ("tube21", include_str!("../../assets/sensors/tube21.toml")),
+    (
+        "allsight",
+        include_str!("../../assets/sensors/allsight.toml"),
+    ),
 ];
 
 /// Why a point has no pixel.
@@ -152,6 +157,8 @@ impl Sensor {
             ambient,
             paint_colour: DVec3::from_array(c.paint.colour),
             vignetting: c.light.vignetting,
+            finger: self.finger,
+            camera: c.camera,
         }
     }
 
