@@ -3,6 +3,7 @@
 //! The pipeline reads like the sensor: [`finger`] geometry and [`lens`] models make the
 //! [`sensor`] projection map; the [`paper`] module keeps the paper's printed formula to
 //! show where it goes wrong.
+pub mod checks;
 pub mod error;
 pub mod finger;
 pub mod lens;

@@ -216,6 +216,8 @@ def calibrate(
     leds: Optional[int] = None,
     samples: Optional[int] = None,
     starts: Optional[int] = None,
+    fit: Optional[str] = None,
+    led_kind: Optional[str] = None,
 ) -> Sensor:
     """A sensor fitted to a real GelTip's own frames, as `geltip calibrate`: `empty` is a
     frame of the empty finger (an image file) or several of the same camera (their spread
@@ -225,5 +227,8 @@ def calibrate(
     sensor.toml, report.json and the pictures (real, calibrated, residual, comparison);
     None keeps no file. `leds` (LEDs to fit), `samples` (pixels compared) and `starts`
     (starting rotations of the LEDs): None for the command's defaults; fewer samples and
-    starts are faster and rougher. Returns the calibrated Sensor, named "calibrated", whose
+    starts are faster and rougher. `fit`: what is fitted, as `--fit` (default
+    "lens,light,imprint"; add "camera" for the colour matrix and gamma, "geometry" for the
+    finger's length); `led_kind`:
+    "point" or "gel" (default: the start sensor's). Returns the calibrated Sensor, named "calibrated", whose
     `calibration` is the report. Runs with the GIL released."""

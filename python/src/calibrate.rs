@@ -5,8 +5,9 @@
 use crate::convert::{count, path_or_str, repr};
 use crate::errors::{bad, detached};
 use crate::sensor::Sensor;
-use geltip::calibrate::Options;
+use geltip::calibrate::{FitSet, Options};
 use geltip::jobs::calibrate as job;
+use geltip::sensor::LedKindName;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -15,10 +16,13 @@ use std::path::PathBuf;
 /// the one to start from (a `Sensor`, a preset name or a TOML path; default "paper").
 /// `contacts`: a JSON-lines file of frames with known contacts (fits the imprint). `out`: a
 /// directory for sensor.toml, report.json and the pictures (None: no file is kept).
-/// `leds`, `samples`, `starts`: None for the command's defaults. Returns the calibrated
+/// `leds`, `samples`, `starts`: None for the command's defaults. `fit`: what is fitted, as
+/// `--fit` ("lens,light,imprint" by default; add "camera" for the colour matrix and gamma,
+/// "geometry" for the finger's length);
+/// `led_kind`: "point" or "gel" (default: the start sensor's). Returns the calibrated
 /// `Sensor`, whose `calibration` is the report.
 #[pyfunction]
-#[pyo3(signature = (empty, sensor = None, *, contacts = None, out = None, leds = None, samples = None, starts = None))]
+#[pyo3(signature = (empty, sensor = None, *, contacts = None, out = None, leds = None, samples = None, starts = None, fit = None, led_kind = None))]
 #[allow(clippy::too_many_arguments)] // The keyword arguments of geltip.calibrate, one each.
 pub fn calibrate(
     py: Python<'_>,
@@ -29,6 +33,8 @@ pub fn calibrate(
     leds: Option<&Bound<'_, PyAny>>,
     samples: Option<&Bound<'_, PyAny>>,
     starts: Option<&Bound<'_, PyAny>>,
+    fit: Option<&str>,
+    led_kind: Option<&str>,
 ) -> PyResult<Sensor> {
     let start = Sensor::of(py, sensor)?.get().inner.clone();
     let mut options = Options::new(start, paths(empty)?);
@@ -46,6 +52,12 @@ pub fn calibrate(
         if let Some(v) = value {
             *slot = count(field, v)?;
         }
+    }
+    if let Some(f) = fit {
+        options.fit = crate::errors::lib(FitSet::parse(f))?;
+    }
+    if let Some(k) = led_kind {
+        options.led_kind = Some(crate::errors::lib(LedKindName::from_name(k))?);
     }
     let (sensor, report) = detached(py, "calibrating", || {
         let judged = job::judge(&options, &|_| {})?;

@@ -137,6 +137,9 @@ def test_out_keeps_the_commands_files_with_the_gil_released(empty_png, tmp_path)
         ("arg", "text", {"leds": -1}, "leds: expected a whole number >= 0, got -1"),
         ("arg", "text", {"leds": 99}, "leds: fits 1 to"),
         ("arg", "text", {"sensor": "nonesuch"}, "unknown sensor 'nonesuch'"),
+        ("arg", "text", {"fit": "light,colour"}, "unknown part 'colour'"),
+        ("arg", "text", {"fit": "camera"}, "add light"),
+        ("arg", "text", {"led_kind": "laser"}, "unknown LED kind 'laser'"),
     ],
 )
 def test_bad_input_is_refused_on_one_line(tmp_path, kind, empty, kwargs, says):

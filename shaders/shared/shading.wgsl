@@ -83,7 +83,7 @@ fn gel_light(i: i32, p: vec3<f32>, normal: vec3<f32>) -> f32 {
     let across = r * turn * cos(latitude);
     let width = band.x + band.y * up;
     let g = across / width;
-    let glow = exp(-0.5 * g * g) * (band.x / width) * exp(-up / band.z);
+    let glow = exp(-0.5 * g * g - up / band.z) * (band.x / width);
     let way_up = vec3<f32>(-sin(latitude) * cos(azimuth), -sin(latitude) * sin(azimuth), cos(latitude));
     return glow * max(1.0 + band.w * dot(normal, way_up), 0.0);
 }

@@ -56,7 +56,7 @@ pub struct FitSet {
     pub lens: bool,
     /// LEDs, ambient light, paint shine, vignetting.
     pub light: bool,
-    /// The camera's colour matrix and gamma.
+    /// The camera's colour matrix and gamma (held by default).
     pub camera: bool,
     /// The finger's length (the cylinder's).
     pub geometry: bool,
@@ -65,12 +65,13 @@ pub struct FitSet {
 }
 
 impl Default for FitSet {
-    /// Lens, light, camera and imprint; the geometry the sensor file states is held.
+    /// Lens, light and imprint; the geometry and the camera the sensor file states are held
+    /// (a camera's response is the camera's: fitted once, on the frame that shows it best).
     fn default() -> Self {
         FitSet {
             lens: true,
             light: true,
-            camera: true,
+            camera: false,
             geometry: false,
             imprint: true,
         }

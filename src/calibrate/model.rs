@@ -296,8 +296,8 @@ impl Model {
         let mut p = Vec::with_capacity(self.len());
         let mut band = GelSpread::DEFAULT;
         for i in 0..self.leds {
-            let led = if keep_own {
-                *own[i]
+            let led = if let (true, Some(own)) = (keep_own, own.get(i)) {
+                **own
             } else {
                 Led {
                     position: DVec3::new(0.0, 0.0, -2.0),

@@ -37,7 +37,7 @@ pub struct CalibrateArgs {
     /// What to fit, comma-separated, of lens (from the image circle), light, camera (colour
     /// matrix and gamma), geometry (the finger's length) and imprint (from --contacts); the
     /// rest is held at the start sensor's values.
-    #[arg(long, default_value = "lens,light,camera,imprint")]
+    #[arg(long, default_value = "lens,light,imprint")]
     fit: String,
     /// Starting rotations of the LEDs tried (more find a better fit more often, and take
     /// longer).
@@ -57,10 +57,12 @@ pub fn calibrate(args: CalibrateArgs) -> Result<()> {
     options.leds = args.leds;
     options.starts = args.starts;
     options.fit = FitSet::parse(&args.fit).map_err(under_flags(&[("fit", "--fit")]))?;
-    options.led_kind = args.led_kind.as_deref().map(|k| match k {
-        "gel" => LedKindName::Gel,
-        _ => LedKindName::Point,
-    });
+    options.led_kind = args
+        .led_kind
+        .as_deref()
+        .map(LedKindName::from_name)
+        .transpose()
+        .map_err(under_flags(&[("led_kind", "--led-kind")]))?;
     let outcome = calibrate::run(&options, &args.out, &|stage| eprintln!("{stage}..."))
         .map_err(under_flags(&[]))?;
     let judged = &outcome.judged;

@@ -148,9 +148,7 @@ pub fn stability(args: StabilityArgs) -> Result<()> {
         sweep.depths = d;
     }
     let noise = args.noise;
-    if !(noise.is_finite() && noise >= 0.0) {
-        anyhow::bail!("--noise: must be a finite number >= 0, got {noise}");
-    }
+    geltip::checks::non_negative(noise).map_err(|reason| anyhow::anyhow!("--noise: {reason}"))?;
     sweep.noise = noise;
     let bar = progress::bar_or_lines("contacts")?;
     let report = stability::run(&sensor, &sweep, Some(&args.out), |done, total| {

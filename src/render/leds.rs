@@ -117,7 +117,7 @@ pub fn gel_light(
     let across = radius * turn * place.cos_latitude;
     let width = band.width_mm + band.widening * up;
     let g = across / width;
-    let glow = (-0.5 * g * g).exp() * (band.width_mm / width) * (-up / band.attenuation_mm).exp();
+    let glow = (-0.5 * g * g - up / band.attenuation_mm).exp() * (band.width_mm / width);
     glow * (1.0 + band.relief * place.tilt_up).max(0.0)
 }
 

@@ -113,14 +113,7 @@ impl Hold {
     /// negative, a tilt inside (-90, 90) degrees. Errors name the contact's fields.
     pub fn check(&self) -> Result<()> {
         let finite = |field: &str, v: f64| {
-            if v.is_finite() {
-                Ok(())
-            } else {
-                Err(GeltipError::contact(
-                    field,
-                    format!("must be a finite number, got {v}"),
-                ))
-            }
+            crate::checks::finite(v).map_err(|reason| GeltipError::contact(field, reason))
         };
         match *self {
             Hold::Surface {

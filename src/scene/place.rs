@@ -45,12 +45,8 @@ impl Place {
 
     /// The place `key` (one of [`PLACE_KEYS`]) = `value`; the value must be finite.
     pub fn from_key(key: &str, value: f64) -> Result<Place> {
-        if !value.is_finite() {
-            return Err(GeltipError::contact(
-                "at",
-                format!("{key} must be a finite number, got {value}"),
-            ));
-        }
+        crate::checks::finite(value)
+            .map_err(|reason| GeltipError::contact("at", format!("{key} {reason}")))?;
         match key {
             "rotation" => Ok(Place::Rotation(value)),
             "translation" => Ok(Place::Translation(value)),

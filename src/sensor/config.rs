@@ -1,6 +1,10 @@
 //! The sensor file as people write it (TOML), loaded with serde and validated field by field.
 
 use super::lighting::{CameraConfig, Leds, LightConfig, Noise};
+use crate::checks::{
+    config_finite as finite, config_non_negative as non_negative,
+    config_positive as finite_positive,
+};
 use crate::error::{GeltipError, Result};
 use crate::lens::{Lens, LensModel};
 use serde::{Deserialize, Serialize};
@@ -171,22 +175,6 @@ fn finger_size(field: &str, v: f64) -> Result<()> {
     Ok(())
 }
 
-pub(super) fn finite_positive(field: &str, v: f64) -> Result<()> {
-    if !v.is_finite() {
-        return Err(GeltipError::config(
-            field,
-            format!("must be a finite number, got {v}"),
-        ));
-    }
-    if v <= 0.0 {
-        return Err(GeltipError::config(
-            field,
-            format!("must be greater than 0, got {v}"),
-        ));
-    }
-    Ok(())
-}
-
 fn is_white(colour: &[f64; 3]) -> bool {
     *colour == [1.0; 3]
 }
@@ -198,16 +186,6 @@ fn drape_given(text: &str) -> bool {
             .and_then(|e| e.as_table())
             .is_some_and(|e| e.contains_key("drape_mm"))
     })
-}
-
-pub(super) fn non_negative(field: &str, v: f64) -> Result<()> {
-    if !v.is_finite() || v < 0.0 {
-        return Err(GeltipError::config(
-            field,
-            format!("must be a finite number >= 0, got {v}"),
-        ));
-    }
-    Ok(())
 }
 
 impl SensorConfig {
@@ -314,12 +292,7 @@ impl SensorConfig {
             ));
         }
         for (field, v, side) in [("lens.cx", l.cx, img.width), ("lens.cy", l.cy, img.height)] {
-            if !v.is_finite() {
-                return Err(GeltipError::config(
-                    field,
-                    format!("must be a finite number, got {v}"),
-                ));
-            }
+            finite(field, v)?;
             if v < 0.0 || v > side as f64 {
                 return Err(GeltipError::config(
                     field,
@@ -328,12 +301,7 @@ impl SensorConfig {
             }
         }
         for (i, k) in l.k.iter().enumerate() {
-            if !k.is_finite() {
-                return Err(GeltipError::config(
-                    format!("lens.k[{i}]"),
-                    format!("must be a finite number, got {k}"),
-                ));
-            }
+            finite(&format!("lens.k[{i}]"), *k)?;
         }
         if l.model != LensModel::KannalaBrandt && l.k.iter().any(|&k| k != 0.0) {
             return Err(GeltipError::config(

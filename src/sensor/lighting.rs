@@ -3,7 +3,10 @@
 //! colour, and the sensor's noise; resolved into one [`Lighting`] that the renderer and its
 //! CPU mirror shade with.
 
-use super::config::{finite_positive, non_negative};
+use crate::checks::{
+    config_finite as finite, config_non_negative as non_negative,
+    config_positive as finite_positive,
+};
 use crate::error::{GeltipError, Result};
 use crate::finger::Finger;
 use glam::DVec3;
@@ -71,6 +74,18 @@ pub enum LedKindName {
 impl LedKindName {
     fn is_point(&self) -> bool {
         *self == LedKindName::Point
+    }
+
+    /// The kind named `name` ("point" or "gel").
+    pub fn from_name(name: &str) -> Result<LedKindName> {
+        match name {
+            "point" => Ok(LedKindName::Point),
+            "gel" => Ok(LedKindName::Gel),
+            other => Err(GeltipError::option(
+                "led_kind",
+                format!("unknown LED kind '{other}'; choose point or gel"),
+            )),
+        }
     }
 }
 
@@ -538,16 +553,6 @@ impl Noise {
             }
         }
     }
-}
-
-fn finite(field: &str, v: f64) -> Result<()> {
-    if !v.is_finite() {
-        return Err(GeltipError::config(
-            field,
-            format!("must be a finite number, got {v}"),
-        ));
-    }
-    Ok(())
 }
 
 /// A gel LED's band; a point LED must not give one.
