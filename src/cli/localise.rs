@@ -13,8 +13,10 @@ pub struct LocaliseArgs {
     /// The no-contact image of the same sensor (PNG or JPEG).
     #[arg(long)]
     reference: PathBuf,
-    /// paper (the paper's detector) or surface (geltip's: noise-relative threshold,
-    /// averaging on the finger's surface).
+    /// paper (the paper's detector), surface (geltip's: noise-relative threshold, averaging
+    /// on the finger's surface) or change (for real sensors' frames: absorbs the LEDs'
+    /// drift, sub-pixel shifts and clipped channels, and says "no contact" when nothing
+    /// stands out).
     #[arg(long, default_value = "surface")]
     method: String,
     /// The image with the contact (PNG or JPEG).

@@ -12,6 +12,7 @@
 //! [`localise`] is the one-call entry point; a [`Localiser`] keeps the per-pixel surface
 //! table that [`Method::Surface`] needs, for localising many frames of one sensor.
 
+pub mod change;
 pub mod paper;
 pub mod raster;
 pub mod surface;
@@ -128,27 +129,34 @@ pub enum Method {
     Paper,
     /// Noise-relative threshold and surface averaging ([`surface`]).
     Surface,
+    /// A change model that absorbs the LEDs' drift, sub-pixel shifts and clipped channels,
+    /// for real sensors' frames ([`change`]).
+    Change,
 }
 
 impl Method {
-    /// Every method, in the order reports list them.
+    /// The methods the paper's experiment and the stability sweep compare, in the order
+    /// reports list them.
     pub const ALL: [Method; 2] = [Method::Paper, Method::Surface];
+    /// Every method a name selects.
+    pub const NAMED: [Method; 3] = [Method::Paper, Method::Surface, Method::Change];
 
     /// The name used on the command line and in JSON.
     pub fn name(self) -> &'static str {
         match self {
             Method::Paper => "paper",
             Method::Surface => "surface",
+            Method::Change => "change",
         }
     }
 
     /// The method with this name.
     pub fn from_name(name: &str) -> Result<Self> {
-        Method::ALL
+        Method::NAMED
             .into_iter()
             .find(|m| m.name() == name)
             .ok_or_else(|| {
-                let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+                let names: Vec<&str> = Method::NAMED.iter().map(|m| m.name()).collect();
                 GeltipError::input(
                     "method",
                     format!("unknown '{name}', expected one of {}", names.join(", ")),
@@ -276,6 +284,24 @@ impl Localiser {
             Method::Surface => {
                 surface::detect(&self.sensor, self.cache(), &self.surface, reference, frame)
             }
+            Method::Change => Ok(self.change(reference, frame)),
+        }
+    }
+
+    /// [`Method::Change`] inside the lens's image circle.
+    fn change(&self, reference: &RgbImage, frame: &RgbImage) -> Detection {
+        let s = &self.sensor;
+        let config = change::ChangeConfig::default();
+        let found = change::detect(reference, frame, s.principal, s.lens.max_rho(), &config);
+        match found.pixel.filter(|_| found.detected) {
+            Some(pixel) => Detection::at_pixel(s, pixel, found.confidence, found.regions),
+            None => Detection::none(
+                found.regions,
+                format!(
+                    "no change stands out: the strongest scores {:.1} noise spreads, a contact needs {}",
+                    found.score, config.score_threshold
+                ),
+            ),
         }
     }
 }
