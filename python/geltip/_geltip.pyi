@@ -173,7 +173,8 @@ def localise(
     sensor: Sensor, reference: _Image, image: _Image, method: str = "surface"
 ) -> Dict[str, Any]:
     """Finds the contact: {"detected", "pixel", "point", "region", "confidence",
-    "regions_found", "note"}, as `geltip localise` prints. method: "surface" or "paper"."""
+    "regions_found", "note"}, as `geltip localise` prints. method: "surface", "paper" or
+    "change" (real sensors' frames)."""
 
 def load_image(path: _Path) -> _Image:
     """Reads an image file (PNG) as (H, W, 3) uint8."""

@@ -96,7 +96,7 @@ def evaluate(
     ``detector(image, reference, sensor)`` gets each frame and its empty frame as
     (H, W, 3) uint8 arrays and the frame's ``geltip.Sensor``, and returns a list of
     detections: dicts with ``"pixel": [u, v]`` or ``"point": [x, y, z]`` (mm, camera
-    frame) and an optional ``"confidence"``. ``"surface"`` or ``"paper"`` names a
+    frame) and an optional ``"confidence"``. ``"surface"``, ``"paper"`` or ``"change"`` names a
     built-in localiser instead. Detections are matched one to one to the visible
     contacts within ``gate_mm`` (None: any distance). With ``out``, the report's files
     (summary.json, per_sample.jsonl, tables.md, charts) are written there, beside

@@ -135,7 +135,7 @@ pub fn evaluate<'py>(
     } else {
         return Err(bad(
             "detector",
-            "expected a function (image, reference, sensor) -> detections, or 'surface' or 'paper'",
+            "expected a function (image, reference, sensor) -> detections, or 'surface', 'paper' or 'change'",
         ));
     };
     let mut detector = Named::new(inner, name);

@@ -34,7 +34,7 @@ pub struct EvaluateArgs {
     /// {"detections": [...]} on stdout.
     #[arg(long)]
     detector: Option<String>,
-    /// A built-in localiser: surface or paper.
+    /// A built-in localiser: surface, paper or change.
     #[arg(long)]
     method: Option<String>,
     /// Directory for summary.json, per_sample.jsonl, tables.md and the charts.
