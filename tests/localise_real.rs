@@ -4,6 +4,8 @@
 //! touches) must read as no contact, and a real contact against its press's own no-contact
 //! frame must be found at the labelled azimuth.
 
+mod common;
+
 use geltip::localise::change::{detect, ChangeConfig, ChangeDetection};
 use geltip::localise::load_image;
 use glam::DVec2;
@@ -121,4 +123,44 @@ fn real_contacts_are_found_at_their_azimuth() {
     assert!(found >= 0.95, "detected {found}");
     assert!(right >= 0.90, "azimuth right {right}");
     assert!(median <= 25.0, "median {median:.1} px");
+}
+
+/// `geltip localise --method change --threshold`: a drift-only pair that the default calls no
+/// contact becomes one with the threshold low enough; a threshold for another method, or one
+/// that is not a positive number, is refused on one line.
+#[test]
+fn the_threshold_is_an_option() {
+    let Some(dir) = allsight() else { return };
+    let (r, f) = (
+        dir.join("s1_ref_frame.jpg"),
+        dir.join("s1_image4_0.45_0.jpg"),
+    );
+    let (r, f) = (r.to_str().unwrap(), f.to_str().unwrap());
+    let base = ["localise", "--sensor", "allsight", "--reference", r];
+    let call = |extra: &[&str]| {
+        let mut args: Vec<&str> = base.to_vec();
+        args.extend_from_slice(extra);
+        args.push(f);
+        common::geltip(&args)
+    };
+    let (code, out, _) = call(&["--method", "change"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("\"detected\":false"), "{out}");
+    let (code, out, _) = call(&["--method", "change", "--threshold", "5"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("\"detected\":true"), "{out}");
+    for (extra, says) in [
+        (
+            &["--threshold", "5"][..],
+            "--threshold: applies to --method change",
+        ),
+        (
+            &["--method", "change", "--threshold=-1"][..],
+            "--threshold: must be greater than 0",
+        ),
+    ] {
+        let (code, _, err) = call(extra);
+        assert_ne!(code, 0);
+        assert!(common::error_line(&err).contains(says), "{err}");
+    }
 }

@@ -170,11 +170,16 @@ class Simulator:
         object's origin (its top). `name` may not be a built-in solid's or a primitive's."""
 
 def localise(
-    sensor: Sensor, reference: _Image, image: _Image, method: str = "surface"
+    sensor: Sensor,
+    reference: _Image,
+    image: _Image,
+    method: str = "surface",
+    threshold: Optional[float] = None,
 ) -> Dict[str, Any]:
     """Finds the contact: {"detected", "pixel", "point", "region", "confidence",
     "regions_found", "note"}, as `geltip localise` prints. method: "surface", "paper" or
-    "change" (real sensors' frames)."""
+    "change" (real sensors' frames); threshold: the change method's decision threshold in
+    noise spreads (default 20), as `--threshold`."""
 
 def load_image(path: _Path) -> _Image:
     """Reads an image file (PNG) as (H, W, 3) uint8."""

@@ -4,28 +4,42 @@
 use crate::convert::{json_to_py, path_or_str, rgb_image};
 use crate::errors::{detached, lib};
 use crate::sensor::Sensor;
+use geltip::localise::change::ChangeConfig;
 use geltip::localise::Method;
 use numpy::{PyArray, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 
 /// Finds the contact in `image` against `reference` (both (H, W, 3) uint8 of the sensor's
 /// size): `{"detected", "pixel", "point", "region", "confidence", "regions_found", "note"}`,
-/// as `geltip localise` prints.
+/// as `geltip localise` prints. `threshold`: the change method's decision threshold (as
+/// `--threshold`).
 #[pyfunction]
-#[pyo3(signature = (sensor, reference, image, method = "surface"))]
+#[pyo3(signature = (sensor, reference, image, method = "surface", threshold = None))]
 pub fn localise<'py>(
     py: Python<'py>,
     sensor: &Bound<'py, Sensor>,
     reference: &Bound<'py, PyAny>,
     image: &Bound<'py, PyAny>,
     method: &str,
+    threshold: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = sensor.get();
     let method = lib(Method::from_name(method))?;
+    let change = match threshold {
+        None => None,
+        Some(_) if method != Method::Change => {
+            return Err(crate::errors::bad(
+                "threshold",
+                format!("applies to method 'change', not '{method}'"),
+            ))
+        }
+        Some(t) => Some(lib(ChangeConfig::with_threshold(t))?),
+    };
     let reference = rgb_image("reference", reference)?;
     let image = rgb_image("image", image)?;
-    let detection = detached(py, "localising", || {
-        s.localiser.localise(&reference, &image, method)
+    let detection = detached(py, "localising", || match &change {
+        Some(config) => s.localiser.localise_change(&reference, &image, config),
+        None => s.localiser.localise(&reference, &image, method),
     })?;
     json_to_py(py, &detection.to_json())
 }

@@ -46,6 +46,10 @@ def test_no_contact_is_a_result(sim, sensor):
     reference = sim.reference()
     found = geltip.localise(sensor, reference, reference.copy())
     assert found["detected"] is False and found["point"] is None and found["note"]
+    for threshold in (None, 1.0):
+        found = geltip.localise(sensor, reference, reference.copy(), method="change",
+                                threshold=threshold)
+        assert found["detected"] is False and "no change stands out" in found["note"]
 
 
 def test_localise_bad_arguments(sim, sensor):
@@ -58,6 +62,10 @@ def test_localise_bad_arguments(sim, sensor):
         geltip.localise(sensor, "ref.png", reference)
     with pytest.raises(ValueError, match="^method: unknown 'magic'"):
         geltip.localise(sensor, reference, reference, method="magic")
+    with pytest.raises(ValueError, match="^threshold: applies to method 'change'"):
+        geltip.localise(sensor, reference, reference, threshold=5.0)
+    with pytest.raises(ValueError, match="^threshold: must be greater than 0"):
+        geltip.localise(sensor, reference, reference, method="change", threshold=0.0)
     # A non-contiguous view is accepted.
     flipped = np.ascontiguousarray(reference[::-1])[::-1]
     assert geltip.localise(sensor, reference, flipped)["detected"] is False

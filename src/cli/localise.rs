@@ -1,8 +1,10 @@
 //! `geltip localise`: the contact in a tactile image, on the finger.
 
+use super::under_flags;
 use anyhow::Result;
 use clap::Args;
-use geltip::localise::{load_frame, localise as find_contact, Method};
+use geltip::localise::change::ChangeConfig;
+use geltip::localise::{load_frame, localise as find_contact, Localiser, Method};
 use geltip::sensor::Sensor;
 use std::path::PathBuf;
 
@@ -19,6 +21,11 @@ pub struct LocaliseArgs {
     /// stands out).
     #[arg(long, default_value = "surface")]
     method: String,
+    /// The change method's decision threshold: how many noise spreads the strongest change
+    /// must stand out to be a contact (default 20; lower finds fainter contacts and calls
+    /// more drift a contact).
+    #[arg(long)]
+    threshold: Option<f64>,
     /// The image with the contact (PNG or JPEG).
     image: PathBuf,
 }
@@ -29,7 +36,17 @@ pub fn localise(args: LocaliseArgs) -> Result<()> {
     let method = Method::from_name(&args.method)?;
     let reference = load_frame(&sensor, &args.reference)?;
     let frame = load_frame(&sensor, &args.image)?;
-    let detection = find_contact(&sensor, &reference, &frame, method)?;
+    let detection = match args.threshold {
+        None => find_contact(&sensor, &reference, &frame, method)?,
+        Some(_) if method != Method::Change => {
+            anyhow::bail!("--threshold: applies to --method change, not {method}")
+        }
+        Some(t) => {
+            let config = ChangeConfig::with_threshold(t)
+                .map_err(under_flags(&[("threshold", "--threshold")]))?;
+            Localiser::new(&sensor).localise_change(&reference, &frame, &config)?
+        }
+    };
     println!("{}", detection.to_json());
     Ok(())
 }

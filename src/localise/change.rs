@@ -68,6 +68,18 @@ impl Default for ChangeConfig {
     }
 }
 
+impl ChangeConfig {
+    /// The defaults with the decision threshold at `threshold` spreads (finite, > 0).
+    pub fn with_threshold(threshold: f64) -> crate::error::Result<ChangeConfig> {
+        crate::checks::positive(threshold)
+            .map_err(|reason| crate::error::GeltipError::option("threshold", reason))?;
+        Ok(ChangeConfig {
+            score_threshold: threshold,
+            ..ChangeConfig::default()
+        })
+    }
+}
+
 /// What the change model found.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChangeDetection {

@@ -284,24 +284,35 @@ impl Localiser {
             Method::Surface => {
                 surface::detect(&self.sensor, self.cache(), &self.surface, reference, frame)
             }
-            Method::Change => Ok(self.change(reference, frame)),
+            Method::Change => self.localise_change(reference, frame, &Default::default()),
         }
     }
 
-    /// [`Method::Change`] inside the lens's image circle.
-    fn change(&self, reference: &RgbImage, frame: &RgbImage) -> Detection {
+    /// [`Method::Change`] inside the lens's image circle, with `config`'s constants (its
+    /// decision threshold, say). Errors as [`Localiser::localise`].
+    pub fn localise_change(
+        &self,
+        reference: &RgbImage,
+        frame: &RgbImage,
+        config: &change::ChangeConfig,
+    ) -> Result<Detection> {
+        check_sizes(reference, frame, Some(&self.sensor))?;
         let s = &self.sensor;
-        let config = change::ChangeConfig::default();
-        let found = change::detect(reference, frame, s.principal, s.lens.max_rho(), &config);
+        let found = change::detect(reference, frame, s.principal, s.lens.max_rho(), config);
         match found.pixel.filter(|_| found.detected) {
-            Some(pixel) => Detection::at_pixel(s, pixel, found.confidence, found.regions),
-            None => Detection::none(
+            Some(pixel) => Ok(Detection::at_pixel(
+                s,
+                pixel,
+                found.confidence,
+                found.regions,
+            )),
+            None => Ok(Detection::none(
                 found.regions,
                 format!(
                     "no change stands out: the strongest scores {:.1} noise spreads, a contact needs {}",
                     found.score, config.score_threshold
                 ),
-            ),
+            )),
         }
     }
 }
