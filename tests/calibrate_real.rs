@@ -3,28 +3,15 @@
 //! sessions' first frames and the GelTip's empty frame, each fitted with the geometry its
 //! sensor file states held. Skipped, with a message, where the folder is absent.
 
+mod common;
+
 use anyhow::Result;
+use common::real;
 use geltip::calibrate::{self, quality, FitSet, Options};
 use geltip::jobs::calibrate::MARGIN_PX;
 use geltip::render::gpu::Renderer;
 use geltip::sensor::Sensor;
 use std::path::PathBuf;
-
-/// The real frames' folder, or `None` (and a message) where it is absent.
-fn real(sub: &str) -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/real")
-        .join(sub);
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipped: {} is absent (real sensor frames; see docs/calibrate.md#real-sensors)",
-            dir.display()
-        );
-        None
-    }
-}
 
 /// Fewer samples than the command's default: the test runs in the dev profile.
 fn quick(start: Sensor, empty: PathBuf) -> Options {

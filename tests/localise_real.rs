@@ -14,16 +14,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 fn allsight() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/real/allsight");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipped: {} is absent (real AllSight frames)",
-            dir.display()
-        );
-        None
-    }
+    common::real("allsight")
 }
 
 const CENTRE: DVec2 = DVec2::new(240.0, 240.0);
@@ -152,7 +143,7 @@ fn the_threshold_is_an_option() {
     for (extra, says) in [
         (
             &["--threshold", "5"][..],
-            "--threshold: applies to --method change",
+            "--threshold: applies to method 'change', not 'surface'",
         ),
         (
             &["--method", "change", "--threshold=-1"][..],

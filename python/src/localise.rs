@@ -4,7 +4,6 @@
 use crate::convert::{json_to_py, path_or_str, rgb_image};
 use crate::errors::{detached, lib};
 use crate::sensor::Sensor;
-use geltip::localise::change::ChangeConfig;
 use geltip::localise::Method;
 use numpy::{PyArray, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
@@ -25,21 +24,11 @@ pub fn localise<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = sensor.get();
     let method = lib(Method::from_name(method))?;
-    let change = match threshold {
-        None => None,
-        Some(_) if method != Method::Change => {
-            return Err(crate::errors::bad(
-                "threshold",
-                format!("applies to method 'change', not '{method}'"),
-            ))
-        }
-        Some(t) => Some(lib(ChangeConfig::with_threshold(t))?),
-    };
     let reference = rgb_image("reference", reference)?;
     let image = rgb_image("image", image)?;
-    let detection = detached(py, "localising", || match &change {
-        Some(config) => s.localiser.localise_change(&reference, &image, config),
-        None => s.localiser.localise(&reference, &image, method),
+    let detection = detached(py, "localising", || {
+        s.localiser
+            .localise_with(&reference, &image, method, threshold)
     })?;
     json_to_py(py, &detection.to_json())
 }

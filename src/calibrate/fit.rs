@@ -152,20 +152,11 @@ fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
 /// Where the LED colours and the ambient light sit in a parameter vector.
 fn colour_slots(model: &Model) -> Vec<usize> {
     let l = model.layout();
-    let first = colour_offset(model);
     let mut slots: Vec<usize> = (0..model.leds)
-        .flat_map(|k| (0..3).map(move |c| k * l.per_led + first + c))
+        .flat_map(|k| (0..3).map(move |c| k * l.per_led + l.colour + c))
         .collect();
     slots.extend((0..3).map(|c| l.ambient + c));
     slots
-}
-
-/// Where an LED's colour starts among its values.
-fn colour_offset(model: &Model) -> usize {
-    match model.kind {
-        crate::sensor::LedKindName::Point => 3,
-        crate::sensor::LedKindName::Gel => 1,
-    }
 }
 
 /// Sets the LED colours and the ambient light of `p` to the linear least-squares fit of the
@@ -179,7 +170,6 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
     let n = model.leds + 1;
     let gamma = d.lighting.camera.gamma;
     let l = model.layout();
-    let first = colour_offset(model);
     // Each LED alone, white and of intensity 1, with no ambient light.
     let alone: Vec<Lighting> = d
         .lighting
@@ -203,12 +193,7 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
         .zip(&samples.hits)
         .map(|((&ray, &x), cached)| {
             let gain = d.lighting.vignette(x);
-            let hit = if model.geometry {
-                super::model::hit_on(&d.finger, ray)
-            } else {
-                *cached
-            };
-            let Some((hit, place)) = hit else {
+            let Some((hit, place)) = model.hit(&d, ray, cached) else {
                 return vec![0.0; n];
             };
             let mut row: Vec<f64> = alone
@@ -241,7 +226,7 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
         }
         if let Some(x) = solve_dense(&ata, &atb, n) {
             for k in 0..model.leds {
-                p[k * l.per_led + first + c] = x[k].max(0.0);
+                p[k * l.per_led + l.colour + c] = x[k].max(0.0);
             }
             p[l.ambient + c] = x[model.leds].max(0.0);
         }

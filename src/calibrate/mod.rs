@@ -81,15 +81,18 @@ impl Default for FitSet {
 impl FitSet {
     pub const PARTS: [&'static str; 5] = ["lens", "light", "camera", "geometry", "imprint"];
 
+    /// Nothing fitted.
+    pub const NONE: FitSet = FitSet {
+        lens: false,
+        light: false,
+        camera: false,
+        geometry: false,
+        imprint: false,
+    };
+
     /// Parses a comma-separated list of [`FitSet::PARTS`] (`"light,lens"`).
     pub fn parse(text: &str) -> Result<FitSet> {
-        let mut set = FitSet {
-            lens: false,
-            light: false,
-            camera: false,
-            geometry: false,
-            imprint: false,
-        };
+        let mut set = FitSet::NONE;
         for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             match part {
                 "lens" => set.lens = true,
@@ -108,7 +111,13 @@ impl FitSet {
                 }
             }
         }
-        if set == FitSet::parse_none() {
+        set.validate()?;
+        Ok(set)
+    }
+
+    /// Refuses a set that fits nothing, or the camera or the geometry without the light.
+    pub fn validate(&self) -> Result<()> {
+        if *self == FitSet::NONE {
             return Err(GeltipError::option(
                 "fit",
                 format!(
@@ -117,23 +126,13 @@ impl FitSet {
                 ),
             ));
         }
-        if (set.camera || set.geometry) && !set.light {
+        if (self.camera || self.geometry) && !self.light {
             return Err(GeltipError::option(
                 "fit",
                 "the camera and the geometry are fitted with the light; add light",
             ));
         }
-        Ok(set)
-    }
-
-    fn parse_none() -> FitSet {
-        FitSet {
-            lens: false,
-            light: false,
-            camera: false,
-            geometry: false,
-            imprint: false,
-        }
+        Ok(())
     }
 
     /// The parts fitted, comma-separated.
@@ -224,12 +223,7 @@ pub struct Calibration {
 
 /// Calibrates `options.start` to the frames; `progress` hears each stage's name.
 pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibration> {
-    if !options.fit.light && options.fit.camera {
-        return Err(GeltipError::option(
-            "fit",
-            "the camera is fitted with the light; add light",
-        ));
-    }
+    options.fit.validate()?;
     if options.leds > crate::sensor::MAX_LEDS {
         return Err(GeltipError::option(
             "leds",

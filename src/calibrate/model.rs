@@ -27,6 +27,8 @@ pub const PER_GEL_LED: usize = 4;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
     pub per_led: usize,
+    /// Where an LED's colour (RGB) starts among its values.
+    pub colour: usize,
     /// Ambient light (RGB).
     pub ambient: usize,
     /// Vignetting a, b.
@@ -125,9 +127,9 @@ impl Model {
     }
 
     pub fn layout(&self) -> Layout {
-        let per_led = match self.kind {
-            LedKindName::Point => PER_POINT_LED,
-            LedKindName::Gel => PER_GEL_LED,
+        let (per_led, colour) = match self.kind {
+            LedKindName::Point => (PER_POINT_LED, 3),
+            LedKindName::Gel => (PER_GEL_LED, 1),
         };
         let mut at = self.leds * per_led;
         let mut take = |n: usize| {
@@ -143,6 +145,7 @@ impl Model {
         let length = self.geometry.then(|| take(1));
         Layout {
             per_led,
+            colour,
             ambient,
             vignetting,
             shine,
@@ -371,24 +374,26 @@ impl Model {
         };
         let ring = crate::sensor::lighting::ring_radius(finger.radius, finger.shell_thickness);
         let band = l.band.map(|i| {
+            let (z, relief) = self.start_gel();
             (
                 GelSpread {
                     width_mm: p[i],
                     widening: p[i + 1],
                     attenuation_mm: p[i + 2],
-                    relief: self.start_relief(),
+                    relief,
                 },
-                self.start_gel_z(),
+                z,
             )
         });
         let leds = (0..self.leds)
             .map(|i| {
                 let v = &p[i * l.per_led..(i + 1) * l.per_led];
                 let a = v[0].to_radians();
+                let colour = DVec3::from_slice(&v[l.colour..l.colour + 3]);
                 match (self.kind, band) {
                     (LedKindName::Gel, Some((band, z))) => Led {
                         position: DVec3::new(ring * a.cos(), ring * a.sin(), z),
-                        colour: DVec3::new(v[1], v[2], v[3]),
+                        colour,
                         intensity: 1.0,
                         spread: 0.0,
                         falloff_mm: 1.0,
@@ -396,7 +401,7 @@ impl Model {
                     },
                     _ => Led {
                         position: DVec3::new(v[2] * a.cos(), v[2] * a.sin(), v[1]),
-                        colour: DVec3::new(v[3], v[4], v[5]),
+                        colour,
                         intensity: 1.0,
                         spread: v[6],
                         falloff_mm: v[7],
@@ -433,28 +438,37 @@ impl Model {
         }
     }
 
-    /// The height of the start sensor's first gel LED (the ring's default without one).
-    fn start_gel_z(&self) -> f64 {
-        self.start
-            .lighting()
-            .leds
-            .iter()
-            .find(|l| matches!(l.kind, LedKind::Gel(_)))
-            .map_or(crate::sensor::LedsConfig::default().z_mm, |l| l.position.z)
-    }
-
-    /// The relief of the start sensor's gel LEDs (an empty frame cannot show it: the
-    /// undeformed skin runs along the light).
-    fn start_relief(&self) -> f64 {
+    /// The height and relief of the start sensor's first gel LED (the ring's height and the
+    /// default relief without one): both held, as an empty frame cannot show the relief
+    /// (the undeformed skin runs along the light) and the height only trades with the band.
+    fn start_gel(&self) -> (f64, f64) {
         self.start
             .lighting()
             .leds
             .iter()
             .find_map(|l| match l.kind {
-                LedKind::Gel(b) => Some(b.relief),
+                LedKind::Gel(b) => Some((l.position.z, b.relief)),
                 LedKind::Point => None,
             })
-            .unwrap_or(GelSpread::DEFAULT.relief)
+            .unwrap_or((
+                crate::sensor::LedsConfig::default().z_mm,
+                GelSpread::DEFAULT.relief,
+            ))
+    }
+
+    /// Where `ray` meets the finger the values `d` describe: the sample's `cached` hit on the
+    /// start sensor's finger while the finger is held.
+    pub fn hit(
+        &self,
+        d: &Decoded,
+        ray: DVec3,
+        cached: &Option<(SkinHit, GelPlace)>,
+    ) -> Option<(SkinHit, GelPlace)> {
+        if self.geometry {
+            hit_on(&d.finger, ray)
+        } else {
+            *cached
+        }
     }
 
     /// The predicted 8-bit colour of every sample, before clipping at 255 (so a fit can see
@@ -470,21 +484,14 @@ impl Model {
             .iter()
             .zip(&samples.radial)
             .zip(&samples.hits)
-            .map(|((&ray, &x), cached)| {
-                let hit = if self.geometry {
-                    hit_on(&d.finger, ray)
-                } else {
-                    *cached
-                };
-                match hit {
-                    Some((hit, place)) => {
-                        let gain = d.lighting.vignette(x);
-                        let light = leds::shade_at(&d.lighting, &paint, &hit, Some(&place));
-                        let c = camera.mix(light * gain);
-                        std::array::from_fn(|k| unclipped_level(c[k], camera.gamma[k]))
-                    }
-                    None => [0.0; 3],
+            .map(|((&ray, &x), cached)| match self.hit(&d, ray, cached) {
+                Some((hit, place)) => {
+                    let gain = d.lighting.vignette(x);
+                    let light = leds::shade_at(&d.lighting, &paint, &hit, Some(&place));
+                    let c = camera.mix(light * gain);
+                    std::array::from_fn(|k| unclipped_level(c[k], camera.gamma[k]))
                 }
+                None => [0.0; 3],
             })
             .collect()
     }
@@ -550,7 +557,7 @@ impl Model {
 pub const OFF_DIAGONAL: [(usize, usize); 6] = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)];
 
 /// Where `ray` meets the undeformed `finger`, as shading takes it.
-pub fn hit_on(finger: &Finger, ray: DVec3) -> Option<(SkinHit, GelPlace)> {
+fn hit_on(finger: &Finger, ray: DVec3) -> Option<(SkinHit, GelPlace)> {
     let s = finger.surface_along(ray)?;
     let hit = SkinHit {
         point: s.point,

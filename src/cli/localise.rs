@@ -3,8 +3,7 @@
 use super::under_flags;
 use anyhow::Result;
 use clap::Args;
-use geltip::localise::change::ChangeConfig;
-use geltip::localise::{load_frame, localise as find_contact, Localiser, Method};
+use geltip::localise::{load_frame, Localiser, Method};
 use geltip::sensor::Sensor;
 use std::path::PathBuf;
 
@@ -36,17 +35,9 @@ pub fn localise(args: LocaliseArgs) -> Result<()> {
     let method = Method::from_name(&args.method)?;
     let reference = load_frame(&sensor, &args.reference)?;
     let frame = load_frame(&sensor, &args.image)?;
-    let detection = match args.threshold {
-        None => find_contact(&sensor, &reference, &frame, method)?,
-        Some(_) if method != Method::Change => {
-            anyhow::bail!("--threshold: applies to --method change, not {method}")
-        }
-        Some(t) => {
-            let config = ChangeConfig::with_threshold(t)
-                .map_err(under_flags(&[("threshold", "--threshold")]))?;
-            Localiser::new(&sensor).localise_change(&reference, &frame, &config)?
-        }
-    };
+    let detection = Localiser::new(&sensor)
+        .localise_with(&reference, &frame, method, args.threshold)
+        .map_err(under_flags(&[("threshold", "--threshold")]))?;
     println!("{}", detection.to_json());
     Ok(())
 }

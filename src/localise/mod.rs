@@ -288,6 +288,28 @@ impl Localiser {
         }
     }
 
+    /// [`Localiser::localise`] with the change method's decision `threshold` when given (in
+    /// noise spreads, finite and > 0); a threshold for another method is an error.
+    pub fn localise_with(
+        &self,
+        reference: &RgbImage,
+        frame: &RgbImage,
+        method: Method,
+        threshold: Option<f64>,
+    ) -> Result<Detection> {
+        match threshold {
+            None => self.localise(reference, frame, method),
+            Some(_) if method != Method::Change => Err(GeltipError::option(
+                "threshold",
+                format!("applies to method 'change', not '{method}'"),
+            )),
+            Some(t) => {
+                let config = change::ChangeConfig::with_threshold(t)?;
+                self.localise_change(reference, frame, &config)
+            }
+        }
+    }
+
     /// [`Method::Change`] inside the lens's image circle, with `config`'s constants (its
     /// decision threshold, say). Errors as [`Localiser::localise`].
     pub fn localise_change(
@@ -299,21 +321,16 @@ impl Localiser {
         check_sizes(reference, frame, Some(&self.sensor))?;
         let s = &self.sensor;
         let found = change::detect(reference, frame, s.principal, s.lens.max_rho(), config);
-        match found.pixel.filter(|_| found.detected) {
-            Some(pixel) => Ok(Detection::at_pixel(
-                s,
-                pixel,
-                found.confidence,
-                found.regions,
-            )),
-            None => Ok(Detection::none(
+        Ok(match found.pixel.filter(|_| found.detected) {
+            Some(pixel) => Detection::at_pixel(s, pixel, found.confidence, found.regions),
+            None => Detection::none(
                 found.regions,
                 format!(
                     "no change stands out: the strongest scores {:.1} noise spreads, a contact needs {}",
                     found.score, config.score_threshold
                 ),
-            )),
-        }
+            ),
+        })
     }
 }
 

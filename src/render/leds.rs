@@ -22,9 +22,7 @@ pub fn emission(towards: DVec3, spread: f64) -> f64 {
 /// once ([`Sensor::lighting`]) for every pixel shaded.
 pub fn shade(light: &Lighting, paint: &PaintConfig, hit: &SkinHit) -> DVec3 {
     let gel = light
-        .leds
-        .iter()
-        .any(|l| matches!(l.kind, LedKind::Gel(_)))
+        .has_gel_leds()
         .then(|| GelPlace::of(&light.finger, hit.point, hit.normal));
     shade_at(light, paint, hit, gel.as_ref())
 }
@@ -147,13 +145,11 @@ pub fn record(camera: &CameraConfig, c: DVec3) -> [u8; 3] {
     std::array::from_fn(|k| encode_gamma(mixed[k], camera.gamma[k]))
 }
 
-/// The 8-bit value of a linear channel under the camera's `gamma`, before rounding.
-pub fn level(linear: f64, gamma: f64) -> f64 {
-    linear.clamp(0.0, 1.0).powf(1.0 / gamma) * 255.0
-}
-
+/// 8-bit value of a linear channel under the camera's `gamma`, rounded.
 fn encode_gamma(linear: f64, gamma: f64) -> u8 {
-    level(linear, gamma).round().clamp(0.0, 255.0) as u8
+    (linear.clamp(0.0, 1.0).powf(1.0 / gamma) * 255.0)
+        .round()
+        .clamp(0.0, 255.0) as u8
 }
 
 /// PCG hash (the same integer arithmetic runs in WGSL).
@@ -181,9 +177,7 @@ pub fn noise_samples(i: u32, seed: u32) -> [f64; 3] {
 
 /// 8-bit value of a linear channel: gamma 2.2, rounded.
 pub fn encode(linear: f64) -> u8 {
-    (linear.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0)
-        .round()
-        .clamp(0.0, 255.0) as u8
+    encode_gamma(linear, 2.2)
 }
 
 /// An 8-bit level with `noise` grey levels added, rounded and clamped (noise is applied to

@@ -202,7 +202,7 @@ impl SensorUniform {
             led_band: leds[3],
             colour_matrix: camera.colour_matrix.map(row),
             inverse_gamma: row(camera.gamma.map(|g| 1.0 / g)),
-            gel_leds: light.leds.iter().any(|l| matches!(l.kind, LedKind::Gel(_))) as u32,
+            gel_leds: light.has_gel_leds() as u32,
             camera_response: !camera.is_default() as u32,
             pad: [0; 2],
             blend_weights,

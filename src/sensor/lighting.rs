@@ -394,6 +394,13 @@ impl Lighting {
         1.0 + self.vignetting[0] * x2 + self.vignetting[1] * x2 * x2
     }
 
+    /// Whether any LED is a gel LED (shading then needs each skin point's [`GelPlace`]).
+    ///
+    /// [`GelPlace`]: crate::render::leds::GelPlace
+    pub fn has_gel_leds(&self) -> bool {
+        self.leds.iter().any(|l| matches!(l.kind, LedKind::Gel(_)))
+    }
+
     /// The spread every LED shares, if they share one.
     pub fn shared_spread(&self) -> Option<f64> {
         let first = self.leds.first()?.spread;

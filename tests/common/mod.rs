@@ -83,3 +83,20 @@ pub fn temp_in(folder: &str, name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
 }
+
+/// A folder of real sensor frames under `../shared/real` (their sources: its README, and
+/// docs/calibrate.md#real-sensors), or `None` and a message saying the tests on it skip.
+pub fn real(sub: &str) -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/real")
+        .join(sub);
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: {} is absent (real sensor frames; see docs/calibrate.md#real-sensors)",
+            dir.display()
+        );
+        None
+    }
+}
