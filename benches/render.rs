@@ -1,6 +1,7 @@
 //! Renderer throughput at the paper sensor's 640x480, printed as a table:
 //! `cargo bench --bench render` (add `-- --frames N` for more frames per pass, `-- --sensor
-//! <preset|file.toml>` for another sensor; `-- --host-phases N` prints only one contact per
+//! <preset|file.toml>` for another sensor, `-- --batch 8,64,256` for the batch rows' frames
+//! per submission (default 8 and the device's default); `-- --host-phases N` prints only one contact per
 //! submit over N passes, by the host's speed before each).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
@@ -24,7 +25,7 @@ use geltip::host_speed::HostSpeed;
 use geltip::jobs::dataset;
 use geltip::jobs::experiment::{self, Protocol};
 use geltip::object::{Object, Solid};
-use geltip::render::gpu::{Renderer, Timings, MAX_BATCH};
+use geltip::render::gpu::{Renderer, Timings};
 use geltip::render::{contact, cpu, elastomer, HeightfieldGrid, Hold, Press};
 use geltip::sensor::Sensor;
 use std::sync::Arc;
@@ -241,7 +242,17 @@ fn main() -> anyhow::Result<()> {
     if let Some(n) = arg::<usize>(&args, "--host-phases")? {
         return host_phases(&mut r, &list, n.max(1));
     }
-    let single = gpu_rows(&mut r, &solids, &list, repeat)?;
+    let batches: Vec<usize> = match arg::<String>(&args, "--batch")? {
+        Some(list) => list
+            .split(',')
+            .map(|n| n.trim().parse::<usize>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| anyhow::anyhow!("--batch {list:?}: {e}"))?,
+        None => vec![8, r.batch_frames()],
+    };
+    let mut batches = batches;
+    batches.dedup();
+    let single = gpu_rows(&mut r, &solids, &list, (repeat, &batches))?;
     cpu_row(&r, &list, repeat)?;
     stage_table(&mut r, &list)?;
     let per_frame = |f: fn(&Timings) -> u64| {
@@ -280,12 +291,13 @@ fn print_table_header() {
 }
 
 /// The GPU's rows over `list`: one contact per submit (its passes are returned), on two
-/// streams, in batches, and one and two contacts per scene.
+/// streams, in batches of each of `batches` frames, and one and two contacts per scene
+/// (the two also in batches).
 fn gpu_rows(
     r: &mut Renderer,
     solids: &[Arc<Object>],
     list: &[Press],
-    repeat: usize,
+    (repeat, batches): (usize, &[usize]),
 ) -> anyhow::Result<Vec<Pass>> {
     let frames = list.len();
     let mut single = passes(repeat, frames, || one_per_submit(r, list))?;
@@ -310,12 +322,19 @@ fn gpu_rows(
     })?;
     row("one per submit, 2 streams", &mut two_streams);
 
-    // A streaming consumer: each batch's frames are dropped before the next (keeping all of
-    // them would time the allocator's fresh pages, not the renderer).
-    let mut batched = passes(repeat, frames, || {
-        each(r, list.chunks(MAX_BATCH), |r, batch| r.render_batch(batch))
-    })?;
-    row(&format!("batches of {MAX_BATCH} contacts"), &mut batched);
+    // Batches (Renderer::render_batch: a submission of n frames, the next batch prepared
+    // while this one renders), as a streaming consumer calls it: the frames of each call
+    // (four submissions) are dropped before the next (keeping all of them would time the
+    // allocator's fresh pages, not the renderer).
+    let default = r.batch_frames();
+    for &n in batches {
+        r.set_batch_frames(n)?;
+        let mut batched = passes(repeat, frames, || {
+            each(r, list.chunks(4 * n), |r, batch| r.render_batch(batch))
+        })?;
+        row(&format!("batches of {n} contacts"), &mut batched);
+    }
+    r.set_batch_frames(default)?;
 
     // Several objects in one frame (Renderer::render_scene): each tap with its twin on the
     // opposite side of the finger (azimuth + 180: imprints that do not overlap), against the
@@ -339,6 +358,17 @@ fn gpu_rows(
         each(r, &twins, |r, pair| r.render_scene(pair))
     })?;
     row("two contacts per scene", &mut two_scene);
+    // The same scenes in batches (Renderer::render_scenes), at the largest batch.
+    let scenes: Vec<Vec<Press>> = twins.iter().map(|t| t.to_vec()).collect();
+    let n = batches.iter().copied().max().unwrap_or(default);
+    r.set_batch_frames(n)?;
+    let mut two_batched = passes(repeat, frames, || {
+        each(r, scenes.chunks(4 * n), |r, chunk| {
+            r.render_scenes(chunk, false)
+        })
+    })?;
+    row(&format!("two per scene, batches of {n}"), &mut two_batched);
+    r.set_batch_frames(default)?;
     Ok(single)
 }
 

@@ -9,11 +9,12 @@
 //!
 //! Prints the host line, then for each line `pass` read from stdin renders the bench's
 //! contacts (the paper's 56 taps over and over, `--frames` of them) with
-//! `Renderer::render_batch` in batches of `MAX_BATCH`, dropping each batch's frames before the
-//! next (as `benches/render.rs` does), and prints the pass's frames per second.
+//! `Renderer::render_batch` in batches of `Renderer::batch_frames`, dropping each batch's
+//! frames before the next (as `benches/render.rs` does), and prints the pass's frames per
+//! second.
 
 use geltip::jobs::experiment::{self, Protocol};
-use geltip::render::gpu::{Renderer, MAX_BATCH};
+use geltip::render::gpu::Renderer;
 use geltip::render::Press;
 use geltip::sensor::Sensor;
 use std::io::{BufRead, Write};
@@ -39,7 +40,7 @@ fn main() -> anyhow::Result<()> {
         match line?.trim() {
             "pass" => {
                 let start = Instant::now();
-                for batch in list.chunks(MAX_BATCH) {
+                for batch in list.chunks(renderer.batch_frames()) {
                     renderer.render_batch(batch)?;
                 }
                 writeln!(out, "{}", list.len() as f64 / start.elapsed().as_secs_f64())?;

@@ -236,6 +236,71 @@ fn same_inputs_give_identical_bytes() {
     assert_eq!(fresh.reference().rgba, r.reference().rgba);
 }
 
+#[test]
+fn batches_of_any_size_give_the_frames_of_one_at_a_time() {
+    // A submission of many frames (the next prepared while one renders, the frame uniforms
+    // in one buffer, the frames unpacked side by side) gives, frame for frame and label for
+    // label, what one frame a submission gives; so do scenes of two contacts.
+    let mut r = paper();
+    let default = r.batch_frames();
+    let solids = [
+        Solid::Sphere,
+        Solid::Cone,
+        Solid::Edge,
+        Solid::Slab,
+        Solid::Tube,
+    ];
+    let list: Vec<Press> = (0..11)
+        .map(|k| {
+            let place = if k % 2 == 0 {
+                Place::Rotation(10.0 * k as f64)
+            } else {
+                Place::Translation(k as f64)
+            };
+            let mut c = contact(solids[k % solids.len()], place, 0.4 + 0.1 * k as f64);
+            if let render::Hold::Surface { azimuth_deg, .. } = &mut c.hold {
+                *azimuth_deg = 33.0 * k as f64;
+            }
+            c
+        })
+        .collect();
+    let one: Vec<_> = list.iter().map(|c| r.render(c).unwrap()).collect();
+    let scenes: Vec<Vec<Press>> = list.chunks(2).map(|c| c.to_vec()).collect();
+    let each: Vec<_> = scenes.iter().map(|s| r.render_scene(s).unwrap()).collect();
+    for n in [4, 64] {
+        r.set_batch_frames(n).unwrap();
+        assert_eq!(r.batch_frames(), n);
+        let batch = r.render_batch(&list).unwrap();
+        assert_eq!(batch.len(), list.len());
+        for (k, ((a, ta), (b, tb))) in one.iter().zip(&batch).enumerate() {
+            assert!(a.rgba == b.rgba, "batch {n}: frame {k}'s image differs");
+            assert!(
+                a.indentation == b.indentation,
+                "batch {n}: frame {k}'s depth"
+            );
+            assert_eq!(ta.to_json(), tb.to_json(), "batch {n}: frame {k}'s labels");
+        }
+        let batched = r.render_scenes(&scenes, false).unwrap();
+        for (k, ((a, ta), (b, tb))) in each.iter().zip(&batched).enumerate() {
+            assert!(a.rgba == b.rgba, "batch {n}: scene {k}'s image differs");
+            assert!(
+                a.indentation == b.indentation,
+                "batch {n}: scene {k}'s depth"
+            );
+            let tb: Vec<_> = tb.iter().map(|(_, t)| t.to_json()).collect();
+            let ta: Vec<_> = ta.iter().map(|t| t.to_json()).collect();
+            assert_eq!(ta, tb, "batch {n}: scene {k}'s labels");
+        }
+    }
+    // Distinct frames: each slot of a submission holds its own.
+    assert_ne!(one[0].0.rgba, one[1].0.rgba);
+    for bad in [0, geltip::render::gpu::MAX_BATCH + 1] {
+        let e = r.set_batch_frames(bad).unwrap_err().to_string();
+        assert!(e.starts_with("batch: ") && e.contains("1 to"), "{e}");
+    }
+    r.set_batch_frames(default).unwrap();
+}
+
 /// A small contact (a cone 0.3 mm deep) and its frame from a fresh renderer of `sensor`:
 /// what a renderer that rendered other frames first must give for it.
 fn small_contact_alone(sensor: &Sensor) -> (Press, Frame) {

@@ -20,7 +20,7 @@ import numpy.typing as npt
 __version__: str
 #: "release" or "debug": how the native module was compiled.
 BUILD_PROFILE: str
-#: Contacts per GPU submission in `Simulator.render_batch`.
+#: The most frames one GPU submission takes (`Simulator.batch_frames`).
 MAX_BATCH: int
 #: The smallest and largest size (mm) of a sized primitive ("box:x=10,y=6,z=4").
 PRIMITIVE_SIZE_MM: Tuple[float, float]
@@ -103,6 +103,12 @@ class Simulator:
     @property
     def host(self) -> str:
         """CPU, adapter and driver the frames are rendered on."""
+    @property
+    def batch_frames(self) -> int:
+        """Frames one GPU submission renders (8 on a software rasteriser, 64 on a GPU by
+        default; settable, 1 to MAX_BATCH). The frames are the same whatever it is."""
+    @batch_frames.setter
+    def batch_frames(self, frames: int) -> None: ...
     def reference(self) -> _Image:
         """The empty finger (H, W, 3) uint8, as `geltip render --reference`."""
     def render(

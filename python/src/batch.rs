@@ -5,7 +5,7 @@
 use crate::convert::{json_to_py, output_array, rgba_to_rgb};
 use crate::errors::{bad, detached};
 use crate::simulator::Simulator;
-use geltip::render::gpu::{Renderer, MAX_BATCH};
+use geltip::render::gpu::Renderer;
 use geltip::render::pool::RenderPool;
 use geltip::render::Frame;
 use geltip::scene::ContactSpec;
@@ -143,7 +143,7 @@ pub fn render<'py>(
     outputs.with_labels(py, truths.iter().map(|t| t.to_json()))
 }
 
-/// Renders `jobs` (a frame each) in submissions of [`MAX_BATCH`] on the pool's streams
+/// Renders `jobs` (a frame each) in submissions of the pool's batch on its streams
 /// (submission c on stream c mod n, so the same calls give the same frames) with `work`,
 /// writing frame i into slot i of `images` (RGB) and `depths`; what `work` gives with each
 /// frame comes back in list order. `work` gets the index of its submission's first job.
@@ -156,20 +156,21 @@ pub fn render_into<J: Sync, T: Send>(
     work: impl Fn(&mut Renderer, usize, &[J]) -> geltip::Result<Vec<(Frame, T)>> + Sync,
 ) -> geltip::Result<Vec<T>> {
     let (frame_rgb, frame_px) = (h * w * 3, h * w);
+    let batch = pool.batch_frames();
     let mut depth_parts: Vec<Option<&mut [f32]>> = match depths {
-        Some(d) => d.chunks_mut(MAX_BATCH * frame_px).map(Some).collect(),
+        Some(d) => d.chunks_mut(batch * frame_px).map(Some).collect(),
         None => Vec::new(),
     };
-    depth_parts.resize_with(jobs.len().div_ceil(MAX_BATCH), || None);
+    depth_parts.resize_with(jobs.len().div_ceil(batch), || None);
     let submissions = jobs
-        .chunks(MAX_BATCH)
+        .chunks(batch)
         .enumerate()
-        .zip(images.chunks_mut(MAX_BATCH * frame_rgb))
+        .zip(images.chunks_mut(batch * frame_rgb))
         .zip(depth_parts);
     let done = pool.map(
         submissions,
         |r: &mut Renderer, (((c, jobs), image), mut depth)| {
-            let frames = work(r, c * MAX_BATCH, jobs)?;
+            let frames = work(r, c * batch, jobs)?;
             let mut out = Vec::with_capacity(frames.len());
             for (k, (frame, t)) in frames.into_iter().enumerate() {
                 copy_frame(&frame, k, image, depth.as_deref_mut());

@@ -139,6 +139,19 @@ impl Simulator {
         &self.host
     }
 
+    /// Frames one GPU submission renders (`render_batch`, `render_scenes` and the MuJoCo
+    /// adapter hand over that many at a time): 8 on a software rasteriser, 64 on a GPU by
+    /// default; 1 to `MAX_BATCH`. The frames are the same whatever it is.
+    #[getter]
+    fn batch_frames(&self) -> PyResult<usize> {
+        Ok(self.pool()?.batch_frames())
+    }
+
+    #[setter]
+    fn set_batch_frames(&self, frames: usize) -> PyResult<()> {
+        Ok(self.pool()?.set_batch_frames(frames)?)
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Simulator(Sensor('{}'), host='{}')",

@@ -80,7 +80,7 @@ def batch_contacts():
 
 def test_batch_equals_single_renders(sim):
     contacts = batch_contacts()
-    assert len(contacts) > geltip.MAX_BATCH  # crosses a submission boundary
+    assert len(contacts) > sim.batch_frames  # crosses a submission boundary
     images, labels, depths = sim.render_batch(contacts)
     assert images.shape == (len(contacts), 480, 640, 3) and images.dtype == np.uint8
     assert depths.shape == (len(contacts), 480, 640) and depths.dtype == np.float32
@@ -94,6 +94,22 @@ def test_batch_equals_single_renders(sim):
         assert labels[k] == label, k
     # Distinct frames: each slot holds its own contact.
     assert len({images[k].tobytes() for k in range(len(contacts))}) == len(contacts)
+
+
+def test_the_batch_size_changes_no_frame(sim):
+    contacts = batch_contacts()
+    want = sim.render_batch(contacts)
+    other = geltip.Simulator("paper")
+    assert other.batch_frames == sim.batch_frames
+    other.batch_frames = 3
+    assert other.batch_frames == 3
+    got = other.render_batch(contacts)
+    np.testing.assert_array_equal(got[0], want[0])
+    np.testing.assert_array_equal(got[2], want[2])
+    assert got[1] == want[1]
+    for bad in (0, geltip.MAX_BATCH + 1):
+        with pytest.raises(ValueError, match="batch: .* frames a submission; 1 to"):
+            other.batch_frames = bad
 
 
 def test_a_batch_takes_tilted_and_posed_contacts_as_render_does(sim):
@@ -111,7 +127,7 @@ def test_streams_share_a_batch_and_render_the_same_frames(sim):
     # Three renderers on devices of their own split the submissions between them, at the
     # same time: the frames, depth maps and labels are those of one renderer, in order.
     contacts = batch_contacts() * 4
-    assert len(contacts) > 3 * geltip.MAX_BATCH  # a stream gets two submissions
+    assert len(contacts) > 3 * sim.batch_frames  # a stream gets two submissions
     three = geltip.Simulator("paper", streams=3)
     images, labels, depths = three.render_batch(contacts)
     want, want_labels, want_depths = sim.render_batch(contacts)

@@ -15,8 +15,8 @@ use crate::error::{GeltipError, Result};
 
 mod buffers;
 pub use buffers::{
-    read_buffer, read_ranges, read_ranges_with, record_ranges, staging_bytes, staging_or_fresh,
-    unpack_ranges,
+    map_ranges, read_buffer, read_ranges, read_ranges_with, record_ranges, staging_bytes,
+    staging_or_fresh, unpack_ranges,
 };
 
 /// Bytes per row of a `width`-pixel row, padded to [`wgpu::COPY_BYTES_PER_ROW_ALIGNMENT`].

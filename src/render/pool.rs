@@ -37,6 +37,26 @@ impl RenderPool<Renderer> {
     }
 }
 
+impl RenderPool<Renderer> {
+    /// Frames a submission of this pool takes: what its users chunk their work by (the
+    /// streams' [`Renderer::batch_frames`], the smallest if they differ).
+    pub fn batch_frames(&self) -> usize {
+        self.streams
+            .iter()
+            .map(Renderer::batch_frames)
+            .min()
+            .unwrap_or(1)
+    }
+
+    /// Sets every stream's frames a submission ([`Renderer::set_batch_frames`]).
+    pub fn set_batch_frames(&mut self, frames: usize) -> Result<()> {
+        for stream in &mut self.streams {
+            stream.set_batch_frames(frames)?;
+        }
+        Ok(())
+    }
+}
+
 impl<R: Send> RenderPool<R> {
     /// A pool of the given streams (at least one).
     pub fn new(streams: Vec<R>) -> Result<RenderPool<R>> {

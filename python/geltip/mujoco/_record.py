@@ -89,7 +89,7 @@ class _Frames:
 
     def add(self, step: int, scene: Scene) -> None:
         self.pending.append((step, scene))
-        if len(self.pending) == _geltip.MAX_BATCH:
+        if len(self.pending) >= self.finger.simulator.batch_frames:
             self.flush()
 
     def flush(self) -> None:

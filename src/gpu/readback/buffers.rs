@@ -173,26 +173,40 @@ pub fn unpack_ranges<R>(
     submission: wgpu::SubmissionIndex,
     mut unpack: impl FnMut(usize, &[u8]) -> R,
 ) -> Result<Vec<R>> {
+    map_ranges(ctx, staging, ranges, submission, |all| {
+        all.iter().enumerate().map(|(k, b)| unpack(k, b)).collect()
+    })
+}
+
+/// As [`unpack_ranges`], handing every range's bytes to `unpack` at once (in order), so the
+/// caller can unpack them side by side.
+pub fn map_ranges<R>(
+    ctx: &GpuContext,
+    staging: &wgpu::Buffer,
+    ranges: &[(&wgpu::Buffer, u64, u64)],
+    submission: wgpu::SubmissionIndex,
+    unpack: impl FnOnce(&[&[u8]]) -> R,
+) -> Result<R> {
     let what = "buffer readback";
     let total = staging_bytes(ranges)?;
     if total == 0 {
         ctx.wait(submission, what)?;
-        return Ok((0..ranges.len()).map(|k| unpack(k, &[])).collect());
+        return Ok(unpack(&vec![&[][..]; ranges.len()]));
     }
     map_read(ctx, staging, total, submission, what)?;
     let result = staging
         .get_mapped_range(..total)
         .map(|view| {
             let mut at = 0usize;
-            ranges
+            let slices: Vec<&[u8]> = ranges
                 .iter()
-                .enumerate()
-                .map(|(k, &(_, _, bytes))| {
-                    let out = unpack(k, &view[at..at + bytes as usize]);
+                .map(|&(_, _, bytes)| {
+                    let slice = &view[at..at + bytes as usize];
                     at += (bytes as usize).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT as usize);
-                    out
+                    slice
                 })
-                .collect()
+                .collect();
+            unpack(&slices)
         })
         .map_err(|e| GeltipError::Gpu(format!("{what}: {}", one_line(&e.to_string()))));
     staging.unmap();

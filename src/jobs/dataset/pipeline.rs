@@ -10,10 +10,11 @@ use super::{Progress, Report, Split};
 use crate::error::{GeltipError, Result};
 use crate::object::Object;
 use crate::output;
-use crate::render::gpu::{PreparedBatch, Renderer, MAX_BATCH};
+use crate::render::gpu::{PreparedBatch, Renderer};
 use crate::render::pool::RenderPool;
 use crate::render::{Frame, GroundTruth};
 use crate::sensor::{Noise, Sensor};
+use rayon::prelude::*;
 use std::path::Path;
 use std::sync::{mpsc, Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -58,7 +59,7 @@ pub(super) fn render_samples(
     let writer = SampleWriter::new(spec, out, pool.first().reference(), background)?;
     let total = todo.len() as u64;
     let mut split = Split::default();
-    let (tx, rx) = mpsc::sync_channel::<Job>(2 * MAX_BATCH);
+    let (tx, rx) = mpsc::sync_channel::<Job>(2 * pool.batch_frames());
     let rx = Mutex::new(rx);
     let rendered = std::thread::scope(|scope| {
         for _ in 0..spec.workers.max(1) {
@@ -104,10 +105,11 @@ fn render_batches<'t>(
     let preparer = pool.first().preparer();
     // Drawn and prepared on the pool's producer thread, a batch ahead of each stream.
     let layout = (spec.empty_fraction, spec.contacts_per_sample);
-    let batches = todo.chunks(MAX_BATCH).map(move |indices| {
+    let batches = todo.chunks(pool.batch_frames()).map(move |indices| {
         let t = Instant::now();
-        let prepared = indices
-            .iter()
+        // Drawn side by side on rayon's threads; the first sample's error in order.
+        let drawn: Vec<Result<Vec<_>>> = indices
+            .par_iter()
             .map(|&k| {
                 let (sensor, range, seed) = (&spec.sensor, spec.depth_range, spec.seed);
                 if spec.scenes() {
@@ -116,6 +118,9 @@ fn render_batches<'t>(
                     sample_contact(sensor, objects, range, seed, k).map(|c| vec![c])
                 }
             })
+            .collect();
+        let prepared = drawn
+            .into_iter()
             .collect::<Result<Vec<_>>>()
             .and_then(|frames| preparer.prepare_frames(&frames));
         (indices, prepared, t.elapsed())

@@ -3,6 +3,7 @@
 //! (`tests/shaders.rs` holds the table to the shader's names and kinds).
 
 use super::resources::{Map, Resources};
+use crate::render::uniforms::FrameUniform;
 
 /// What a binding holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -132,7 +133,11 @@ impl Binding {
         let map = |m: Map| wgpu::BindingResource::TextureView(&r.heightfield.map(m).view);
         match self {
             Binding::Sensor => r.sensor.as_entire_binding(),
-            Binding::Frame => f.uniform.as_entire_binding(),
+            Binding::Frame => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: f.uniform,
+                offset: f.uniform_offset,
+                size: std::num::NonZeroU64::new(FRAME_UNIFORM_BYTES),
+            }),
             Binding::Penetration => r.heightfield.buffer(Map::Penetration).as_entire_binding(),
             Binding::ElastomerScratch => r.heightfield.buffer(Map::Elastomer).as_entire_binding(),
             Binding::Height => r.heightfield.buffer(Map::Height).as_entire_binding(),
@@ -158,11 +163,16 @@ pub(super) fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
         .collect()
 }
 
-/// What differs between the bind groups: the frame uniform, the frame's slot of a
-/// submission (its slices of the image, indentation and counters buffers), and the SDF grid
-/// its contact pass traces (a loaded mesh's, else an empty one).
+/// Bytes of a frame uniform as bound.
+const FRAME_UNIFORM_BYTES: u64 = std::mem::size_of::<FrameUniform>() as u64;
+
+/// What differs between the bind groups: the frame uniform (at `uniform_offset` of
+/// `uniform`), the frame's slot of a submission (its slices of the image, indentation and
+/// counters buffers), and the SDF grid its contact pass traces (a loaded mesh's, else an
+/// empty one).
 pub(super) struct FrameBinding<'a> {
     pub uniform: &'a wgpu::Buffer,
+    pub uniform_offset: u64,
     pub slot: u64,
     pub grid: &'a wgpu::Buffer,
 }

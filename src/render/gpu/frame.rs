@@ -1,4 +1,4 @@
-//! The one frame path: a submission of up to [`MAX_BATCH`] frames, each a scene of one or
+//! The one frame path: a submission of up to [`Renderer::batch_frames`] frames, each a scene of one or
 //! more contacts (a batch's frame is a scene of one). Per frame, every object's contact pass
 //! over its own pressed rect (each texel keeps the deepest press); the elastomer's passes
 //! over the union of the footprints, split into disjoint rectangles (the cost follows the
@@ -11,13 +11,14 @@ use super::layout::{COUNTER_HEADER_BYTES, DEEP_COUNT, OVER_PRESSED, SHALLOW_COUN
 use super::prepare::{too_many, Prepared};
 use super::readback::ReadFrames;
 use super::record::{Recorder, Stage};
-use super::resources::held_bytes;
+use super::resources::{held_bytes, UNIFORM_STRIDE};
 use super::stages::ContactPass;
-use super::{Renderer, Timings, MAX_BATCH};
+use super::{Renderer, Timings};
 use crate::error::Result;
 use crate::object::Object;
 use crate::render::uniforms::{rect4, FrameUniform};
 use crate::render::{Frame, GroundTruth, Rect};
+use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
 /// A frame to render: its contacts and its noise seed.
@@ -53,12 +54,20 @@ pub(super) struct FrameBinds {
     meridians: Vec<usize>,
 }
 
-/// A submission's bind groups, each over a uniform buffer of its own. The passes of a frame
-/// whose uniforms are equal share one: a frame of one contact binds one for all its passes.
+/// A submission's bind groups. The frame uniforms go into one buffer, written once
+/// ([`super::resources::Resources::write_uniforms`]), each group binding its own; the passes
+/// of a frame whose uniforms are equal share one: a frame of one contact binds one for all
+/// its passes.
 #[derive(Default)]
 pub(super) struct BindGroups {
     pub groups: Vec<wgpu::BindGroup>,
-    uniforms: Vec<(u64, FrameUniform)>,
+}
+
+/// The bind groups of a submission, planned before any is made: per group, its frame's
+/// slot, its uniform and the object whose SDF grid it binds (a contact's) or none.
+#[derive(Default)]
+struct BindPlan<'c> {
+    groups: Vec<(u64, FrameUniform, Option<&'c Object>)>,
 }
 
 /// The smallest rect covering `rects`.
@@ -66,54 +75,44 @@ fn span(rects: &[Rect]) -> Option<Rect> {
     rects.iter().copied().reduce(|a, b| a.union(&b))
 }
 
-impl BindGroups {
+impl<'c> BindPlan<'c> {
     /// A contact's: its own, as it binds its object's SDF grid.
-    fn contact(&mut self, r: &Renderer, slot: u64, u: FrameUniform, object: &Object) -> usize {
-        let grid = r.resources.grid_of(object);
-        self.push(r, slot, u, grid)
-    }
-
-    /// One for uniform `u` in frame `slot`: the frame's bind group of an equal uniform if it
-    /// has one (whatever SDF grid it binds: only the contact passes read it).
-    fn shared(&mut self, r: &Renderer, slot: u64, u: FrameUniform) -> usize {
-        let same = |(s, v): &(u64, FrameUniform)| {
-            *s == slot && bytemuck::bytes_of(v) == bytemuck::bytes_of(&u)
-        };
-        match self.uniforms.iter().position(same) {
-            Some(k) => k,
-            None => self.push(r, slot, u, &r.resources.empty_grid),
-        }
-    }
-
-    fn push(&mut self, r: &Renderer, slot: u64, u: FrameUniform, grid: &wgpu::Buffer) -> usize {
-        let uniform = r.uniform_buffer(&u);
-        let binding = FrameBinding {
-            uniform: &uniform,
-            slot,
-            grid,
-        };
-        self.groups
-            .push(r.resources.bind_group(&r.ctx.device, binding));
-        self.uniforms.push((slot, u));
+    fn contact(&mut self, slot: u64, u: FrameUniform, object: &'c Object) -> usize {
+        self.groups.push((slot, u, Some(object)));
         self.groups.len() - 1
     }
 
+    /// One for uniform `u` in frame `slot`: the frame's group of an equal uniform if it has
+    /// one (whatever SDF grid it binds: only the contact passes read it).
+    fn shared(&mut self, slot: u64, u: FrameUniform) -> usize {
+        let same = |(s, v, _): &(u64, FrameUniform, Option<&Object>)| {
+            *s == slot && bytemuck::bytes_of(v) == bytemuck::bytes_of(&u)
+        };
+        match self.groups.iter().position(same) {
+            Some(k) => k,
+            None => {
+                self.groups.push((slot, u, None));
+                self.groups.len() - 1
+            }
+        }
+    }
+
     /// The bind groups of `plan`'s frame of `contacts`.
-    fn frame(&mut self, r: &Renderer, plan: &FramePlan, contacts: &[Prepared]) -> FrameBinds {
+    fn frame(&mut self, plan: &FramePlan, contacts: &'c [Prepared]) -> FrameBinds {
         let slot = plan.slot;
         let contacts = contacts
             .iter()
             .map(|p| {
                 let mut u = p.uniform.holding(plan.holding);
                 u.noise_seed = plan.uniform.noise_seed;
-                self.contact(r, slot, u, &p.press.object)
+                self.contact(slot, u, &p.press.object)
             })
             .collect();
-        let frame = self.shared(r, slot, plan.uniform);
+        let frame = self.shared(slot, plan.uniform);
         let mut piece = |f: &dyn Fn(&mut FrameUniform)| {
             let mut u = plan.uniform;
             f(&mut u);
-            self.shared(r, slot, u)
+            self.shared(slot, u)
         };
         let texels = plan
             .texels
@@ -142,8 +141,8 @@ impl Renderer {
         scenes: Vec<Scene>,
         prepare: Duration,
     ) -> Result<Vec<(Frame, Vec<GroundTruth>)>> {
-        if scenes.len() > MAX_BATCH {
-            return Err(too_many(scenes.len()));
+        if scenes.len() > self.batch {
+            return Err(too_many(scenes.len(), self.batch));
         }
         for (contacts, _) in &scenes {
             for p in contacts {
@@ -158,35 +157,50 @@ impl Renderer {
             render: read.mapped - start,
             ..Timings::default()
         };
-        let mut fields = read.fields.into_iter();
-        let mut out = Vec::with_capacity(scenes.len());
-        for ((contacts, _), part) in scenes.iter().zip(read.frames) {
+        for part in &read.frames {
             let c = &part.counters;
             timings.touched_pixels +=
                 c[SHALLOW_COUNT as usize] as u64 + c[DEEP_COUNT as usize] as u64;
             timings.listed_tiles += c[TILE_COUNT as usize] as u64;
-            let over_pressed = c[OVER_PRESSED as usize] > 0;
-            let frame = Frame {
-                width: self.sensor.width,
-                height: self.sensor.height,
-                rgba: part.rgba,
-                indentation: part.indentation,
-            };
-            let truths = contacts
-                .iter()
-                .map(|p| {
-                    let field = fields.next().unwrap_or_default();
-                    let mut truth = p.labels(&self.sensor, &self.grid, &field);
-                    // Only a contact's pixel rect is ever indented: its mask is counted there.
-                    let (count, bbox) = p.pixel_rect().map_or((0, None), |r| frame.mask_in(r));
-                    truth.mask_pixels = count;
-                    truth.mask_bbox = bbox;
-                    truth.over_pressed = over_pressed;
-                    truth
-                })
-                .collect();
-            out.push((frame, truths));
         }
+        // Each frame's contacts' fields start where the frames before left off.
+        let firsts = scenes.iter().scan(0, |at, (contacts, _)| {
+            let first = *at;
+            *at += contacts.len();
+            Some(first)
+        });
+        let firsts: Vec<usize> = firsts.collect();
+        let (sensor, grid, fields) = (&self.sensor, &self.grid, &read.fields);
+        let out: Vec<(Frame, Vec<GroundTruth>)> = scenes
+            .par_iter()
+            .zip(read.frames)
+            .zip(firsts)
+            .map(|(((contacts, _), part), first)| {
+                let c = &part.counters;
+                let over_pressed = c[OVER_PRESSED as usize] > 0;
+                let frame = Frame {
+                    width: sensor.width,
+                    height: sensor.height,
+                    rgba: part.rgba,
+                    indentation: part.indentation,
+                };
+                let truths = contacts
+                    .iter()
+                    .zip(first..)
+                    .map(|(p, k)| {
+                        let field = fields.get(k).map_or(&[][..], |f| &f[..]);
+                        let mut truth = p.labels(sensor, grid, field);
+                        // Only a contact's pixel rect is ever indented: its mask is counted there.
+                        let (count, bbox) = p.pixel_rect().map_or((0, None), |r| frame.mask_in(r));
+                        truth.mask_pixels = count;
+                        truth.mask_bbox = bbox;
+                        truth.over_pressed = over_pressed;
+                        truth
+                    })
+                    .collect();
+                (frame, truths)
+            })
+            .collect();
         timings.readback = read.mapped.elapsed();
         self.timings = timings;
         Ok(out)
@@ -230,19 +244,35 @@ impl Renderer {
         offsets
     }
 
-    /// The bind groups of the frames `plans` plan, of the contacts of each.
+    /// The bind groups of the frames `plans` plan, of the contacts of each: their uniforms
+    /// written to the frame uniforms' buffer, then a group each.
     pub(super) fn bind_frames<'c>(
-        &self,
+        &mut self,
         plans: &[FramePlan],
         contacts: impl Iterator<Item = &'c [Prepared]>,
     ) -> (BindGroups, Vec<FrameBinds>) {
-        let mut groups = BindGroups::default();
+        let mut plan = BindPlan::default();
         let binds = plans
             .iter()
             .zip(contacts)
-            .map(|(plan, contacts)| groups.frame(self, plan, contacts))
+            .map(|(p, contacts)| plan.frame(p, contacts))
             .collect();
-        (groups, binds)
+        let uniforms: Vec<FrameUniform> = plan.groups.iter().map(|g| g.1).collect();
+        self.resources.write_uniforms(self.ctx, &uniforms);
+        let res = &self.resources;
+        let groups = (0..)
+            .zip(&plan.groups)
+            .map(|(k, &(slot, _, object))| {
+                let binding = FrameBinding {
+                    uniform: &res.frame_uniforms,
+                    uniform_offset: k * UNIFORM_STRIDE,
+                    slot,
+                    grid: object.map_or(&res.empty_grid, |o| res.grid_of(o)),
+                };
+                res.bind_group(&self.ctx.device, binding)
+            })
+            .collect();
+        (BindGroups { groups }, binds)
     }
 
     /// The plan of the frame of `contacts` in `slot`; the heightfield's bookkeeping moves on

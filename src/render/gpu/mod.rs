@@ -30,7 +30,7 @@ mod streams;
 
 pub use prepare::{PreparedBatch, Preparer};
 
-use crate::error::Result;
+use crate::error::{GeltipError, Result};
 use crate::gpu::GpuContext;
 use crate::object::Object;
 use crate::render::uniforms::{object_kind, FrameUniform, SensorUniform};
@@ -42,8 +42,18 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
-/// Frames recorded into one submission at most.
-pub const MAX_BATCH: usize = 8;
+/// Frames one submission takes at most ([`Renderer::set_batch_frames`]).
+pub const MAX_BATCH: usize = 256;
+
+/// Frames a renderer records into one submission unless told otherwise: a few on a software
+/// device, whose cores render the frames anyway (more only hold memory), many on a GPU,
+/// where a frame's own work is short and what a submission costs is fixed.
+pub fn default_batch(adapter: &wgpu::AdapterInfo) -> usize {
+    match adapter.device_type {
+        wgpu::DeviceType::Cpu => 8,
+        _ => 64,
+    }
+}
 
 /// A contact a frame of [`Renderer::render_scenes`] shows: its index in the frame's list of
 /// presses, and its labels.
@@ -87,6 +97,8 @@ pub struct Renderer {
     pipelines: Pipelines,
     /// Texels the heightfield's maps may hold non-zero (the last frame's texel span).
     dirty: Option<Rect>,
+    /// Frames recorded into one submission ([`Self::batch_frames`]).
+    batch: usize,
     reference: Frame,
     /// Frames given noise so far: each draws its seed from it ([`Self::next_noise_seed`]).
     seed_counter: u32,
@@ -104,7 +116,8 @@ impl Renderer {
     /// on different devices render at the same time).
     pub fn on(sensor: &Sensor, ctx: &'static GpuContext) -> Result<Renderer> {
         let grid = HeightfieldGrid::for_sensor(sensor);
-        let resources = Resources::new(ctx, sensor, &grid)?;
+        let batch = default_batch(&ctx.adapter_info);
+        let resources = Resources::new(ctx, sensor, &grid, batch)?;
         let constants = SensorUniform::new(sensor, &grid).pipeline_constants();
         let pipelines = Pipelines::new(ctx, &resources.pipeline_layout, constants)?;
         let mut renderer = Renderer {
@@ -114,6 +127,7 @@ impl Renderer {
             resources,
             pipelines,
             dirty: None,
+            batch,
             reference: Frame {
                 width: sensor.width,
                 height: sensor.height,
@@ -130,6 +144,28 @@ impl Renderer {
     /// The sensor this renderer draws.
     pub fn sensor(&self) -> &Sensor {
         &self.sensor
+    }
+
+    /// Frames recorded into one submission: [`Self::render_batch`] and
+    /// [`Self::render_scenes`] render in chunks of this many, and the render pool's users
+    /// ([`crate::render::pool::RenderPool::batch_frames`]) hand over submissions of it.
+    pub fn batch_frames(&self) -> usize {
+        self.batch
+    }
+
+    /// Records `frames` frames (1 to [`MAX_BATCH`]) into one submission from now on; the
+    /// frames are the same whatever the batch (each draws its noise seed in turn).
+    pub fn set_batch_frames(&mut self, frames: usize) -> Result<()> {
+        if !(1..=MAX_BATCH).contains(&frames) {
+            return Err(GeltipError::input(
+                "batch",
+                format!("{frames} frames a submission; 1 to {MAX_BATCH}"),
+            ));
+        }
+        resources::check_frames(self.ctx, &self.sensor, frames)?;
+        self.resources.reserve_frames(self.ctx, frames);
+        self.batch = frames;
+        Ok(())
     }
 
     /// The heightfield grid.
@@ -179,25 +215,62 @@ impl Renderer {
         Ok(out.remove(0))
     }
 
-    /// Renders presses, a frame each, in batches of up to [`MAX_BATCH`] per submission.
+    /// Renders presses, a frame each, in submissions of [`Self::batch_frames`].
     pub fn render_batch(&mut self, presses: &[Press]) -> Result<Vec<(Frame, GroundTruth)>> {
-        let mut out = Vec::with_capacity(presses.len());
-        let mut total = Timings::default();
+        self.render_chunks(presses, Preparer::prepare, |r, batch| {
+            r.render_prepared(batch)
+        })
+    }
+
+    /// Renders `items` in chunks of [`Self::batch_frames`], a submission each: each chunk is
+    /// prepared by `prepare` (on rayon's threads) while the chunk before it renders, so the
+    /// CPU's share of a frame leaves the GPU's path but for the first chunk. The timings
+    /// are the chunks' totals (`prepare`: the CPU's time, mostly beside the rendering).
+    fn render_chunks<I, P, O>(
+        &mut self,
+        items: &[I],
+        prepare: impl Fn(&Preparer, &[I]) -> Result<P> + Sync,
+        mut render: impl FnMut(&mut Renderer, P) -> Result<Vec<O>>,
+    ) -> Result<Vec<O>>
+    where
+        I: Sync,
+        P: Send,
+    {
         let preparer = self.preparer();
-        for chunk in presses.chunks(MAX_BATCH) {
+        let chunks: Vec<&[I]> = items.chunks(self.batch).collect();
+        let timed = |chunk: &[I]| {
             let start = Instant::now();
-            let batch = preparer.prepare(chunk)?;
-            total.prepare += start.elapsed();
-            out.extend(self.render_prepared(batch)?);
+            (prepare(&preparer, chunk), start.elapsed())
+        };
+        let mut out = Vec::with_capacity(items.len());
+        let mut total = Timings::default();
+        let mut next = chunks.first().map(|c| timed(c));
+        for k in 0..chunks.len() {
+            let Some((prepared, took)) = next.take() else {
+                break;
+            };
+            total.prepare += took;
+            let prepared = prepared?;
+            let (rendered, following) = std::thread::scope(|scope| {
+                let following = chunks.get(k + 1).map(|c| scope.spawn(|| timed(c)));
+                let rendered = render(self, prepared);
+                (rendered, following.map(|h| h.join()))
+            });
+            out.extend(rendered?);
             total.add(&self.timings);
+            next = match following {
+                Some(Ok(n)) => Some(n),
+                Some(Err(_)) => return Err(GeltipError::Gpu("preparing a batch panicked".into())),
+                None => None,
+            };
         }
         self.timings = total;
         Ok(out)
     }
 
     /// Renders a batch a [`Preparer`] prepared with [`Preparer::prepare`] (at most
-    /// [`MAX_BATCH`] contacts, in one submission), a frame each, each frame drawing its noise
-    /// seed in turn.
+    /// [`Self::batch_frames`] contacts, in one submission), a frame each, each frame drawing
+    /// its noise seed in turn.
     pub fn render_prepared(&mut self, batch: PreparedBatch) -> Result<Vec<(Frame, GroundTruth)>> {
         let frames = self.render_prepared_frames(batch)?;
         Ok(frames
@@ -206,15 +279,15 @@ impl Renderer {
             .collect())
     }
 
-    /// Renders a batch of frames of any number of contacts each (at most [`MAX_BATCH`]
-    /// frames, in one submission), each frame drawing its noise seed in turn: each frame with
-    /// its contacts' labels.
+    /// Renders a batch of frames of any number of contacts each (at most
+    /// [`Self::batch_frames`] frames, in one submission), each frame drawing its noise seed
+    /// in turn: each frame with its contacts' labels.
     pub fn render_prepared_frames(
         &mut self,
         batch: PreparedBatch,
     ) -> Result<Vec<(Frame, Vec<GroundTruth>)>> {
-        if batch.0.len() > MAX_BATCH {
-            return Err(prepare::too_many(batch.0.len()));
+        if batch.0.len() > self.batch {
+            return Err(prepare::too_many(batch.0.len(), self.batch));
         }
         let scenes = batch
             .0
@@ -224,8 +297,8 @@ impl Renderer {
         self.render_frames(scenes, Duration::ZERO)
     }
 
-    /// Renders frames of several objects each (any number of frames, [`MAX_BATCH`] to a
-    /// submission), as [`Renderer::render_scene`] renders one, each frame drawing its noise
+    /// Renders frames of several objects each (any number of frames,
+    /// [`Self::batch_frames`] to a submission), as [`Renderer::render_scene`] renders one, each frame drawing its noise
     /// seed in turn. With `skip_untouching`, rigid poses that do not touch the finger are
     /// left out of their frame ([`Press::pose_if_touching`]) instead of failing the call, and
     /// a frame none of whose objects touch is the empty finger. Each frame comes with the
@@ -235,29 +308,22 @@ impl Renderer {
         frames: &[Vec<Press>],
         skip_untouching: bool,
     ) -> Result<Vec<(Frame, Vec<Shown>)>> {
-        let mut out = Vec::with_capacity(frames.len());
-        let mut total = Timings::default();
-        let preparer = self.preparer();
-        for chunk in frames.chunks(MAX_BATCH) {
-            let start = Instant::now();
-            let (batch, kept) = if skip_untouching {
-                preparer.prepare_touching(chunk)?
+        let prepare = |preparer: &Preparer, chunk: &[Vec<Press>]| {
+            if skip_untouching {
+                preparer.prepare_touching(chunk)
             } else {
                 let all = chunk.iter().map(|f| (0..f.len()).collect()).collect();
-                (preparer.prepare_frames(chunk)?, all)
-            };
-            total.prepare += start.elapsed();
-            let frames = self.render_prepared_frames(batch)?;
-            total.add(&self.timings);
-            out.extend(
-                frames
-                    .into_iter()
-                    .zip(kept)
-                    .map(|((frame, truths), kept)| (frame, kept.into_iter().zip(truths).collect())),
-            );
-        }
-        self.timings = total;
-        Ok(out)
+                Ok((preparer.prepare_frames(chunk)?, all))
+            }
+        };
+        self.render_chunks(frames, prepare, |r, (batch, kept)| {
+            let frames = r.render_prepared_frames(batch)?;
+            Ok(frames
+                .into_iter()
+                .zip(kept)
+                .map(|((frame, truths), kept)| (frame, kept.into_iter().zip(truths).collect()))
+                .collect())
+        })
     }
 
     /// Renders several objects pressed into the finger at once, as one frame: the skin is

@@ -1,7 +1,6 @@
 //! The CPU's half of rendering, which needs no GPU: each contact's pose (its first-touch
 //! search), footprint and frame uniform before the GPU runs, and its labels after.
 
-use super::MAX_BATCH;
 use crate::error::{GeltipError, Result};
 use crate::render::contact::{self, Footprint, IndentationLabels};
 use crate::render::uniforms::FrameUniform;
@@ -60,29 +59,23 @@ pub struct Preparer {
 }
 
 impl Preparer {
-    /// Prepares presses for one submission, a frame each (at most [`MAX_BATCH`] render in
-    /// one).
+    /// Prepares presses for one submission, a frame each (at most
+    /// [`super::Renderer::batch_frames`] render in one), side by side on rayon's threads.
     pub fn prepare(&self, presses: &[Press]) -> Result<PreparedBatch> {
-        presses
-            .iter()
-            .map(|p| Ok(vec![prepare(&self.sensor, &self.grid, p)?]))
-            .collect::<Result<Vec<_>>>()
-            .map(PreparedBatch)
+        in_order(presses, |p| Ok(vec![prepare(&self.sensor, &self.grid, p)?])).map(PreparedBatch)
     }
 
     /// Prepares frames of several contacts each (none: the empty finger) for one submission,
-    /// a frame each (at most [`MAX_BATCH`] render in one).
+    /// a frame each (at most [`super::Renderer::batch_frames`] render in one), side by side
+    /// on rayon's threads.
     pub fn prepare_frames(&self, frames: &[Vec<Press>]) -> Result<PreparedBatch> {
-        frames
-            .iter()
-            .map(|presses| {
-                presses
-                    .iter()
-                    .map(|p| prepare(&self.sensor, &self.grid, p))
-                    .collect::<Result<Vec<_>>>()
-            })
-            .collect::<Result<Vec<_>>>()
-            .map(PreparedBatch)
+        in_order(frames, |presses| {
+            presses
+                .iter()
+                .map(|p| prepare(&self.sensor, &self.grid, p))
+                .collect::<Result<Vec<_>>>()
+        })
+        .map(PreparedBatch)
     }
 
     /// Prepares frames of several contacts each for one submission, a frame each, leaving
@@ -131,12 +124,19 @@ impl Preparer {
     }
 }
 
-/// The error for a batch of `n` contacts, more than a submission takes.
-pub(super) fn too_many(n: usize) -> GeltipError {
+/// The error for a batch of `n` frames, more than a submission of `batch` takes.
+pub(super) fn too_many(n: usize, batch: usize) -> GeltipError {
     GeltipError::input(
         "batch",
-        format!("{n} contacts, at most {MAX_BATCH} a submission"),
+        format!("{n} frames, at most {batch} a submission (Renderer::set_batch_frames)"),
     )
+}
+
+/// Each item of `items` through `f` on rayon's threads, in order; the first item's error in
+/// order (not whichever thread failed first), so an error is the same from run to run.
+fn in_order<I: Sync, O: Send>(items: &[I], f: impl Fn(&I) -> Result<O> + Sync) -> Result<Vec<O>> {
+    let all: Vec<Result<O>> = items.par_iter().map(&f).collect();
+    all.into_iter().collect()
 }
 
 /// Pose, footprint and frame uniform of one press.

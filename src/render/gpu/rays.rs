@@ -36,6 +36,7 @@ impl Renderer {
         let res = &self.resources;
         let binding = FrameBinding {
             uniform: &uniform,
+            uniform_offset: 0,
             slot: 0,
             grid: &res.empty_grid,
         };

@@ -6,11 +6,10 @@ use super::layout::COUNTER_HEADER_BYTES;
 use super::resources::held_bytes;
 use super::Renderer;
 use crate::error::{GeltipError, Result};
-use crate::gpu::readback::{
-    read_buffer, record_ranges, staging_bytes, staging_or_fresh, unpack_ranges, unpadded_rows,
-};
+use crate::gpu::readback::{map_ranges, read_buffer, record_ranges, staging_bytes, unpadded_rows};
 use crate::render::uniforms::image_pitch;
 use crate::render::Rect;
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// A frame's data as read back.
@@ -36,7 +35,7 @@ impl Renderer {
     /// then the contacts' penetration fields over `fields` (byte ranges of the penetration
     /// fields; an empty field for `None`).
     pub(super) fn read_frames(
-        &self,
+        &mut self,
         what: &str,
         mut encoder: wgpu::CommandEncoder,
         rects: &[Option<Rect>],
@@ -52,9 +51,69 @@ impl Renderer {
                 "a frame's rect {r:?} reaches beyond the {width}x{height} image"
             )));
         }
+        // The kept staging buffer grows to the largest submission read.
+        let total = staging_bytes(&self.frame_ranges(rects, fields))?;
+        self.resources.reserve_staging(self.ctx, total);
+        let ranges = self.frame_ranges(rects, fields);
+        let staging = &self.resources.staging;
+        record_ranges(&mut encoder, staging, &ranges)?;
+        let submission = self.ctx.submit(what, encoder)?;
+        // Each frame as the reference's pixels and zero indentation, laid out while the GPU
+        // works: this thread would only wait, and after the wait only the rects read are
+        // left to copy over them.
+        let pixels = width as usize * height as usize;
+        let mut frames: Vec<FrameParts> = rects
+            .par_iter()
+            .map(|_| FrameParts {
+                rgba: self.reference.rgba.clone(),
+                indentation: vec![0.0; pixels],
+                counters: Vec::new(),
+            })
+            .collect();
+        let frame_ranges = 3 * rects.len();
+        let (mapped, read_fields) = map_ranges(self.ctx, staging, &ranges, submission, |all| {
+            let mapped = Instant::now();
+            let (parts, fields) = all.split_at(frame_ranges);
+            frames
+                .par_iter_mut()
+                .zip(parts.par_chunks(3))
+                .zip(rects)
+                .for_each(|((frame, part), rect)| {
+                    if let Some(r) = *rect {
+                        let rgba = bytemuck::cast_slice_mut::<u8, [u8; 4]>(&mut frame.rgba);
+                        paste_rows(rgba, width, r, part[0], |b| b);
+                        paste_rows(
+                            &mut frame.indentation,
+                            width,
+                            r,
+                            part[1],
+                            f32::from_ne_bytes,
+                        );
+                    }
+                    frame.counters = bytemuck::pod_collect_to_vec(part[2]);
+                });
+            let fields: Vec<Vec<f32>> = fields
+                .par_iter()
+                .map(|b| bytemuck::pod_collect_to_vec(b))
+                .collect();
+            (mapped, fields)
+        })?;
+        Ok(ReadFrames {
+            frames,
+            fields: read_fields,
+            mapped,
+        })
+    }
+
+    /// What [`Self::read_frames`] reads: per frame, its image's and indentation's rect and
+    /// its counters; then the fields.
+    fn frame_ranges(
+        &self,
+        rects: &[Option<Rect>],
+        fields: &[Option<(u64, u64)>],
+    ) -> Vec<(&wgpu::Buffer, u64, u64)> {
         let res = &self.resources;
-        let mut ranges: Vec<(&wgpu::Buffer, u64, u64)> =
-            Vec::with_capacity(3 * rects.len() + fields.len());
+        let mut ranges = Vec::with_capacity(3 * rects.len() + fields.len());
         for (k, rect) in (0..).zip(rects) {
             let slot = k * res.slot_bytes;
             let bytes = rect.map_or(0, held_bytes);
@@ -65,52 +124,7 @@ impl Renderer {
         for &(offset, bytes) in fields.iter().map(|f| f.as_ref().unwrap_or(&(0, 0))) {
             ranges.push((&res.penetration_fields, offset, bytes));
         }
-        // The kept staging buffer holds a full batch; a scene of very many contacts may need
-        // more for its fields.
-        let mut fresh = None;
-        let total = staging_bytes(&ranges)?;
-        let staging = staging_or_fresh(self.ctx, Some(&res.staging), total, &mut fresh);
-        record_ranges(&mut encoder, staging, &ranges)?;
-        let submission = self.ctx.submit(what, encoder)?;
-        // Each frame as the reference's pixels and zero indentation, laid out while the GPU
-        // works: this thread would only wait, and after the wait only the rects read are
-        // left to copy over them.
-        let pixels = width as usize * height as usize;
-        let mut frames: Vec<FrameParts> = rects
-            .iter()
-            .map(|_| FrameParts {
-                rgba: self.reference.rgba.clone(),
-                indentation: vec![0.0; pixels],
-                counters: Vec::new(),
-            })
-            .collect();
-        let mut read_fields = vec![Vec::new(); fields.len()];
-        let mut mapped = None;
-        let frame_ranges = 3 * rects.len();
-        unpack_ranges(self.ctx, staging, &ranges, submission, |k, bytes| {
-            mapped.get_or_insert_with(Instant::now);
-            if k >= frame_ranges {
-                read_fields[k - frame_ranges] = bytemuck::pod_collect_to_vec(bytes);
-                return;
-            }
-            let (frame, rect) = (&mut frames[k / 3], rects[k / 3]);
-            match (k % 3, rect) {
-                (0, Some(r)) => {
-                    let rgba = bytemuck::cast_slice_mut::<u8, [u8; 4]>(&mut frame.rgba);
-                    paste_rows(rgba, width, r, bytes, |b| b);
-                }
-                (1, Some(r)) => {
-                    paste_rows(&mut frame.indentation, width, r, bytes, f32::from_ne_bytes)
-                }
-                (2, _) => frame.counters = bytemuck::pod_collect_to_vec(bytes),
-                _ => {}
-            }
-        })?;
-        Ok(ReadFrames {
-            frames,
-            fields: read_fields,
-            mapped: mapped.unwrap_or_else(Instant::now),
-        })
+        ranges
     }
 
     /// The image in the first frame's slice of the image buffer, all of it (rows

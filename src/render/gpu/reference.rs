@@ -41,6 +41,7 @@ impl Renderer {
         let (res, p) = (&self.resources, &self.pipelines);
         let binding = FrameBinding {
             uniform: &uniform,
+            uniform_offset: 0,
             slot: 0,
             grid: &res.empty_grid,
         };

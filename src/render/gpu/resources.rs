@@ -5,12 +5,11 @@ use super::bindings::layout_entries;
 use super::layout::{
     COUNTER_HEADER_BYTES, DISPATCH_ARGS_BYTES, PROBES_BYTES_PER_PIXEL, PROBE_TILE_BYTES,
 };
-use super::MAX_BATCH;
 use crate::error::{GeltipError, Result};
 use crate::gpu::GpuContext;
 use crate::object::Object;
 use crate::render::touched::tile_grid;
-use crate::render::uniforms::{image_pitch, SensorUniform};
+use crate::render::uniforms::{image_pitch, FrameUniform, SensorUniform};
 use crate::render::{HeightfieldGrid, Rect};
 use crate::sensor::Sensor;
 use std::collections::HashMap;
@@ -45,8 +44,13 @@ pub(super) struct Resources {
     pub penetration_fields: wgpu::Buffer,
     /// The empty finger's image, from which a frame copies the rect it can change.
     pub reference_texture: wgpu::Texture,
-    /// Kept for reading a submission back (its images, indentation rows and counters).
+    /// Kept for reading a submission back (its images, indentation rows and counters),
+    /// grown to the largest submission read so far.
     pub staging: wgpu::Buffer,
+    /// A submission's frame uniforms, [`UNIFORM_STRIDE`] bytes apart, written before it.
+    pub frame_uniforms: wgpu::Buffer,
+    /// Frames of a submission the image, indentation, counters and dispatch buffers hold.
+    pub frames: usize,
     /// What a frame without a loaded mesh binds as its SDF grid.
     pub empty_grid: wgpu::Buffer,
     /// Baked SDF grids of loaded meshes, by object (the Arc keeps the address unique).
@@ -133,6 +137,16 @@ pub(super) fn storage(
     })
 }
 
+/// A buffer for `count` frame uniforms, [`UNIFORM_STRIDE`] bytes apart.
+fn uniforms(ctx: &GpuContext, count: u64) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("geltip frame uniforms"),
+        size: count.max(1) * UNIFORM_STRIDE,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
 fn map_texture(
     ctx: &GpuContext,
     label: &str,
@@ -170,6 +184,7 @@ fn probes_bytes(sensor: &Sensor) -> u64 {
 
 /// Refuses a device that cannot hold or run the renderer for `sensor`, naming what is short.
 fn check_device(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Result<()> {
+    check_frames(ctx, sensor, 1)?;
     let downlevel = ctx.adapter.get_downlevel_capabilities();
     if !downlevel
         .flags
@@ -184,15 +199,7 @@ fn check_device(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Re
     let allowed = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
-    let slot_bytes = held_bytes(whole_image(sensor));
-    let image_bytes = probes_bytes(sensor).max(slot_bytes * MAX_BATCH as u64);
     let (w, h) = (sensor.width, sensor.height);
-    if image_bytes > allowed {
-        return Err(GeltipError::input(
-            "image",
-            format!("{w}x{h} needs {image_bytes} byte GPU buffers; this device allows {allowed}"),
-        ));
-    }
     let side = limits.max_texture_dimension_2d;
     if 2 * w > side || h > side {
         return Err(GeltipError::input(
@@ -222,6 +229,37 @@ fn check_device(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Re
     Ok(())
 }
 
+/// Refuses a submission of `frames` frames of `sensor` that this device cannot hold, naming
+/// what is short.
+pub(super) fn check_frames(ctx: &GpuContext, sensor: &Sensor, frames: usize) -> Result<()> {
+    let limits = ctx.device.limits();
+    let slot_bytes = held_bytes(whole_image(sensor));
+    let (w, h) = (sensor.width, sensor.height);
+    let allowed = limits.max_storage_buffer_binding_size;
+    let image_bytes = probes_bytes(sensor).max(slot_bytes);
+    if image_bytes > allowed {
+        return Err(GeltipError::input(
+            "image",
+            format!("{w}x{h} needs {image_bytes} byte GPU buffers; this device allows {allowed}"),
+        ));
+    }
+    let batch_bytes = slot_bytes * frames as u64;
+    let allowed = limits.max_buffer_size;
+    if batch_bytes > allowed {
+        return Err(GeltipError::input(
+            "batch",
+            format!(
+                "{frames} frames of {w}x{h} need {batch_bytes} byte GPU buffers; this device allows {allowed}"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Bytes between two frame uniforms of a submission: the uniform offset alignment every
+/// device allows.
+pub(super) const UNIFORM_STRIDE: u64 = 256;
+
 /// Every pixel of `sensor`'s image, as a rect.
 pub(super) fn whole_image(sensor: &Sensor) -> Rect {
     Rect {
@@ -235,8 +273,15 @@ pub(super) fn whole_image(sensor: &Sensor) -> Rect {
 impl Resources {
     /// Everything the renderer of `sensor` binds, once [`check_device`] passes.
     // Over 80 lines: one struct literal, every resource in one place.
-    pub fn new(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Result<Resources> {
+    /// The frame buffers hold `frames` frames ([`Self::reserve_frames`] grows them).
+    pub fn new(
+        ctx: &GpuContext,
+        sensor: &Sensor,
+        grid: &HeightfieldGrid,
+        frames: usize,
+    ) -> Result<Resources> {
         check_device(ctx, sensor, grid)?;
+        check_frames(ctx, sensor, frames)?;
         let texels = grid.texels as u64 * grid.texels as u64;
         let slot_bytes = held_bytes(whole_image(sensor));
         let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
@@ -261,7 +306,7 @@ impl Resources {
             (layout, pipeline_layout)
         })?;
         let none = wgpu::BufferUsages::empty();
-        let batch = MAX_BATCH as u64;
+        let batch = frames as u64;
         Ok(Resources {
             layout,
             pipeline_layout,
@@ -316,10 +361,12 @@ impl Resources {
             }),
             staging: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("geltip batch readback"),
-                size: (2 * slot_bytes + COUNTER_HEADER_BYTES + texels * 4) * batch,
+                size: (2 * slot_bytes + COUNTER_HEADER_BYTES + texels * 4) * batch.min(8),
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
+            frame_uniforms: uniforms(ctx, 4 * batch),
+            frames,
             empty_grid: storage(ctx, "geltip empty grid", 16, none),
             grids: HashMap::new(),
             slot_bytes,
@@ -342,6 +389,59 @@ impl Resources {
             },
             extent(r),
         );
+    }
+
+    /// Makes the frame buffers (image, indentation, counters, dispatch arguments) hold a
+    /// submission of `frames` frames; what they held is dropped (each frame's start writes
+    /// its slices anew).
+    pub fn reserve_frames(&mut self, ctx: &GpuContext, frames: usize) {
+        if frames <= self.frames {
+            return;
+        }
+        let (n, none) = (frames as u64, wgpu::BufferUsages::empty());
+        self.image = storage(ctx, "geltip image", self.slot_bytes * n, none);
+        self.indentation = storage(ctx, "geltip indentation", self.slot_bytes * n, none);
+        self.counters = storage(
+            ctx,
+            "geltip counters and touched pixels",
+            self.counter_bytes * n,
+            none,
+        );
+        self.dispatch_args = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("geltip touched dispatch"),
+            size: DISPATCH_ARGS_BYTES * n,
+            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        self.frames = frames;
+    }
+
+    /// Makes `staging` take `bytes` (kept for the submissions after).
+    pub fn reserve_staging(&mut self, ctx: &GpuContext, bytes: u64) {
+        if self.staging.size() < bytes {
+            self.staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("geltip batch readback"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+    }
+
+    /// Writes a submission's frame uniforms, [`UNIFORM_STRIDE`] bytes apart (uniform `k` at
+    /// byte `k * UNIFORM_STRIDE` of `frame_uniforms`), growing the buffer if it must.
+    pub fn write_uniforms(&mut self, ctx: &GpuContext, all: &[FrameUniform]) {
+        let bytes = all.len().max(1) as u64 * UNIFORM_STRIDE;
+        if self.frame_uniforms.size() < bytes {
+            self.frame_uniforms = uniforms(ctx, all.len() as u64);
+        }
+        let mut data = vec![0u8; all.len() * UNIFORM_STRIDE as usize];
+        for (chunk, u) in data.chunks_exact_mut(UNIFORM_STRIDE as usize).zip(all) {
+            chunk[..std::mem::size_of::<FrameUniform>()].copy_from_slice(bytemuck::bytes_of(u));
+        }
+        if !data.is_empty() {
+            ctx.queue.write_buffer(&self.frame_uniforms, 0, &data);
+        }
     }
 
     /// Makes `penetration_fields` hold at least `bytes` (a scene may have many contacts).
