@@ -242,7 +242,7 @@ fn batches_of_any_size_give_the_frames_of_one_at_a_time() {
     // in one buffer, the frames unpacked side by side) gives, frame for frame and label for
     // label, what one frame a submission gives; so do scenes of two contacts.
     let mut r = paper();
-    let default = r.batch_frames();
+    let default = (r.batch_frames(), r.lanes());
     let solids = [
         Solid::Sphere,
         Solid::Cone,
@@ -267,9 +267,12 @@ fn batches_of_any_size_give_the_frames_of_one_at_a_time() {
     let one: Vec<_> = list.iter().map(|c| r.render(c).unwrap()).collect();
     let scenes: Vec<Vec<Press>> = list.chunks(2).map(|c| c.to_vec()).collect();
     let each: Vec<_> = scenes.iter().map(|s| r.render_scene(s).unwrap()).collect();
-    for n in [4, 64] {
+    // Frames recorded side by side (lanes: each stage of each frame before the next
+    // stage, each frame on a heightfield of its own) or one after the other.
+    for (n, lanes) in [(4, 1), (4, 3), (64, 16)] {
         r.set_batch_frames(n).unwrap();
-        assert_eq!(r.batch_frames(), n);
+        r.set_lanes(lanes).unwrap();
+        assert_eq!((r.batch_frames(), r.lanes()), (n, lanes));
         let batch = r.render_batch(&list).unwrap();
         assert_eq!(batch.len(), list.len());
         for (k, ((a, ta), (b, tb))) in one.iter().zip(&batch).enumerate() {
@@ -297,8 +300,11 @@ fn batches_of_any_size_give_the_frames_of_one_at_a_time() {
     for bad in [0, geltip::render::gpu::MAX_BATCH + 1] {
         let e = r.set_batch_frames(bad).unwrap_err().to_string();
         assert!(e.starts_with("batch: ") && e.contains("1 to"), "{e}");
+        let e = r.set_lanes(bad).unwrap_err().to_string();
+        assert!(e.starts_with("lanes: ") && e.contains("1 to"), "{e}");
     }
-    r.set_batch_frames(default).unwrap();
+    r.set_batch_frames(default.0).unwrap();
+    r.set_lanes(default.1).unwrap();
 }
 
 /// A small contact (a cone 0.3 mm deep) and its frame from a fresh renderer of `sensor`:

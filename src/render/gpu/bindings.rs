@@ -130,7 +130,8 @@ impl Binding {
                 size: std::num::NonZeroU64::new(bytes),
             })
         };
-        let map = |m: Map| wgpu::BindingResource::TextureView(&r.heightfield.map(m).view);
+        let heightfield = &r.heightfields[f.lane];
+        let map = |m: Map| wgpu::BindingResource::TextureView(&heightfield.map(m).view);
         match self {
             Binding::Sensor => r.sensor.as_entire_binding(),
             Binding::Frame => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -138,9 +139,9 @@ impl Binding {
                 offset: f.uniform_offset,
                 size: std::num::NonZeroU64::new(FRAME_UNIFORM_BYTES),
             }),
-            Binding::Penetration => r.heightfield.buffer(Map::Penetration).as_entire_binding(),
-            Binding::ElastomerScratch => r.heightfield.buffer(Map::Elastomer).as_entire_binding(),
-            Binding::Height => r.heightfield.buffer(Map::Height).as_entire_binding(),
+            Binding::Penetration => heightfield.buffer(Map::Penetration).as_entire_binding(),
+            Binding::ElastomerScratch => heightfield.buffer(Map::Elastomer).as_entire_binding(),
+            Binding::Height => heightfield.buffer(Map::Height).as_entire_binding(),
             Binding::Probes => r.probes.as_entire_binding(),
             Binding::Image => slice(&r.image, r.slot_bytes),
             Binding::Indentation => slice(&r.indentation, r.slot_bytes),
@@ -168,12 +169,13 @@ const FRAME_UNIFORM_BYTES: u64 = std::mem::size_of::<FrameUniform>() as u64;
 
 /// What differs between the bind groups: the frame uniform (at `uniform_offset` of
 /// `uniform`), the frame's slot of a submission (its slices of the image, indentation and
-/// counters buffers), and the SDF grid its contact pass traces (a loaded mesh's, else an
-/// empty one).
+/// counters buffers), its lane (the heightfield it works on), and the SDF grid its contact
+/// pass traces (a loaded mesh's, else an empty one).
 pub(super) struct FrameBinding<'a> {
     pub uniform: &'a wgpu::Buffer,
     pub uniform_offset: u64,
     pub slot: u64,
+    pub lane: usize,
     pub grid: &'a wgpu::Buffer,
 }
 

@@ -11,8 +11,9 @@ use super::layout::{COUNTER_HEADER_BYTES, DEEP_COUNT, OVER_PRESSED, SHALLOW_COUN
 use super::prepare::{too_many, Prepared};
 use super::readback::ReadFrames;
 use super::record::{Recorder, Stage};
-use super::resources::{held_bytes, UNIFORM_STRIDE};
+use super::resources::{held_bytes, Heightfield, Map, UNIFORM_STRIDE};
 use super::stages::ContactPass;
+use super::stages::{copy_listed_args, copy_touched_args};
 use super::{Renderer, Timings};
 use crate::error::Result;
 use crate::object::Object;
@@ -133,6 +134,28 @@ impl<'c> BindPlan<'c> {
     }
 }
 
+/// A frame of a submission as its recording needs it.
+pub(super) struct FrameWork<'a> {
+    plan: &'a FramePlan,
+    /// Its contacts' passes, those with a footprint.
+    contacts: Vec<ContactPass<'a>>,
+    /// The bind group of its whole-frame passes, and those of its texel and meridian pieces.
+    frame: &'a wgpu::BindGroup,
+    texels: Vec<(Rect, &'a wgpu::BindGroup)>,
+    meridians: Vec<(Rect, &'a wgpu::BindGroup)>,
+    /// Its lane's heightfield.
+    heightfield: &'a Heightfield,
+}
+
+/// Refreshes `map` over the region of each frame of `wave` that presses the skin.
+fn refresh(rec: &mut Recorder, wave: &[FrameWork], map: Map) {
+    for f in wave {
+        if let Some(region) = f.plan.region {
+            f.heightfield.refresh(rec.encoder(), map, Some(region));
+        }
+    }
+}
+
 impl Renderer {
     /// Renders `scenes` in one submission, a frame each: each frame with its contacts'
     /// labels, in order. `prepare` is the CPU's time before (for [`Renderer::timings`]).
@@ -216,12 +239,9 @@ impl Renderer {
             .collect();
         let (groups, binds) = self.bind_frames(&plans, scenes.iter().map(|(c, _)| &c[..]));
         let mut rec = Recorder::new(self.ctx, &self.resources.dispatch_args);
-        let mut at = offsets.as_slice();
-        for ((plan, binds), (contacts, _)) in plans.iter().zip(&binds).zip(scenes) {
-            let (mine, rest) = at.split_at(contacts.len());
-            self.record_frame(&mut rec, plan, contacts, binds, &groups.groups, mine)?;
-            at = rest;
-        }
+        let contacts_of = scenes.iter().map(|(c, _)| &c[..]);
+        let work = self.frame_work(&plans, contacts_of, &binds, &groups.groups, &offsets);
+        self.record_frames(&mut rec, &work)?;
         let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
         let fields: Vec<Option<(u64, u64)>> = contacts
             .iter()
@@ -267,6 +287,7 @@ impl Renderer {
                     uniform: &res.frame_uniforms,
                     uniform_offset: k * UNIFORM_STRIDE,
                     slot,
+                    lane: self.lane_of(slot),
                     grid: object.map_or(&res.empty_grid, |o| res.grid_of(o)),
                 };
                 res.bind_group(&self.ctx.device, binding)
@@ -286,9 +307,10 @@ impl Renderer {
         ));
         let texel_span = span(&texels);
         let holding = self.changed_rect(pixels);
+        let lane = self.lane_of(slot);
         let region = texel_span.map(|t| {
-            let region = self.dirty.map_or(t, |d| d.union(&t));
-            self.dirty = Some(t);
+            let region = self.dirty[lane].map_or(t, |d| d.union(&t));
+            self.dirty[lane] = Some(t);
             region
         });
         let mut uniform = contacts
@@ -310,17 +332,16 @@ impl Renderer {
         }
     }
 
-    /// Records one frame's stages, in order, marking each stage's end for a profile.
-    pub(super) fn record_frame<'a>(
+    /// What recording the frames `plans` plan needs of each: its contacts' passes (those
+    /// with a footprint), its bind groups and its lane's heightfield.
+    pub(super) fn frame_work<'a>(
         &'a self,
-        rec: &mut Recorder<'a>,
-        plan: &FramePlan,
-        contacts: &[Prepared],
-        binds: &FrameBinds,
+        plans: &'a [FramePlan],
+        scenes: impl Iterator<Item = &'a [Prepared]>,
+        binds: &'a [FrameBinds],
         groups: &'a [wgpu::BindGroup],
         field_offsets: &[u64],
-    ) -> Result<()> {
-        let (res, p) = (&self.resources, &self.pipelines);
+    ) -> Vec<FrameWork<'a>> {
         let pieces = |rects: &[Rect], binds: &[usize]| -> Vec<(Rect, &'a wgpu::BindGroup)> {
             rects
                 .iter()
@@ -328,66 +349,128 @@ impl Renderer {
                 .map(|(&r, &k)| (r, &groups[k]))
                 .collect()
         };
-        let frame = &groups[binds.frame];
-        self.record_frame_start(rec.encoder(), plan);
-        rec.stage_done(Stage::Start)?;
-        let texels = pieces(&plan.texels, &binds.texels);
-        if let Some(region) = plan.region {
-            let passes: Vec<ContactPass> = contacts
-                .iter()
-                .zip(&binds.contacts)
-                .zip(field_offsets)
-                .filter_map(|((c, &k), &at)| {
-                    c.footprint.map(|f| ContactPass {
-                        bind: &groups[k],
-                        kind: c.uniform.object_kind,
-                        pressed: f.pressed,
-                        field_offset: at,
+        let mut at = field_offsets;
+        plans
+            .iter()
+            .zip(scenes)
+            .zip(binds)
+            .map(|((plan, contacts), b)| {
+                let (mine, rest) = at.split_at(contacts.len().min(at.len()));
+                at = rest;
+                let passes = contacts
+                    .iter()
+                    .zip(&b.contacts)
+                    .zip(mine)
+                    .filter_map(|((c, &k), &field_offset)| {
+                        c.footprint.map(|f| ContactPass {
+                            bind: &groups[k],
+                            kind: c.uniform.object_kind,
+                            pressed: f.pressed,
+                            field_offset,
+                        })
                     })
-                })
-                .collect();
-            p.contact.record(rec, res, &passes, region)?;
-            rec.stage_done(Stage::Contact)?;
-            let meridians = pieces(&plan.meridians, &binds.meridians);
-            p.elastomer.record_meridians(rec, res, &meridians, region);
-            rec.stage_done(Stage::Meridians)?;
-            p.elastomer.record_parallels(rec, res, &texels, region);
-            rec.stage_done(Stage::Parallels)?;
-            p.elastomer.record_normals(rec, &texels);
-        } else {
-            for stage in [Stage::Contact, Stage::Meridians, Stage::Parallels] {
-                rec.stage_done(stage)?;
+                    .collect();
+                FrameWork {
+                    plan,
+                    contacts: passes,
+                    frame: &groups[b.frame],
+                    texels: pieces(&plan.texels, &b.texels),
+                    meridians: pieces(&plan.meridians, &b.meridians),
+                    heightfield: &self.resources.heightfields[self.lane_of(plan.slot)],
+                }
+            })
+            .collect()
+    }
+
+    /// The lane (heightfield) of the frame in `slot`.
+    pub(super) fn lane_of(&self, slot: u64) -> usize {
+        slot as usize % self.lanes
+    }
+
+    /// Records the frames' stages: [`Renderer::lanes`] frames at a time, each stage of each
+    /// of them before the next stage, so that their dispatches share passes and the copies
+    /// between stages run together; each stage's end marked for a profile.
+    pub(super) fn record_frames<'a>(
+        &'a self,
+        rec: &mut Recorder<'a>,
+        frames: &[FrameWork<'a>],
+    ) -> Result<()> {
+        let (res, p) = (&self.resources, &self.pipelines);
+        let pressed = |f: &FrameWork| f.plan.region.is_some();
+        let seen = |f: &FrameWork| f.plan.pixels.is_some();
+        for wave in frames.chunks(self.lanes) {
+            for f in wave {
+                self.record_frame_start(rec.encoder(), f);
             }
+            rec.stage_done(Stage::Start)?;
+            // Each frame's k-th contact, its own penetration copied out before the next.
+            let most = wave.iter().map(|f| f.contacts.len()).max().unwrap_or(0);
+            for k in 0..most {
+                for c in wave.iter().filter_map(|f| f.contacts.get(k)) {
+                    p.contact.dispatch(rec, c)?;
+                }
+                for f in wave {
+                    if let Some(c) = f.contacts.get(k) {
+                        let fields = &res.penetration_fields;
+                        f.heightfield
+                            .copy_field(rec.encoder(), c.pressed, fields, c.field_offset);
+                    }
+                }
+            }
+            refresh(rec, wave, Map::Penetration);
+            rec.stage_done(Stage::Contact)?;
+            for f in wave.iter().filter(|f| pressed(f)) {
+                p.elastomer.dispatch_meridians(rec, &f.meridians);
+            }
+            refresh(rec, wave, Map::Elastomer);
+            rec.stage_done(Stage::Meridians)?;
+            for f in wave.iter().filter(|f| pressed(f)) {
+                p.elastomer.dispatch_parallels(rec, &f.texels);
+            }
+            refresh(rec, wave, Map::Height);
+            rec.stage_done(Stage::Parallels)?;
+            for f in wave.iter().filter(|f| pressed(f)) {
+                p.elastomer.record_normals(rec, &f.texels);
+            }
+            rec.stage_done(Stage::SkinNormals)?;
+            // The tile lists join the normals' pass (both read the height map alone); the
+            // normals' maps are refreshed after it.
+            for f in wave {
+                if let Some(pixels) = f.plan.pixels {
+                    p.touched.record_tiles(rec, pixels, f.frame);
+                }
+            }
+            refresh(rec, wave, Map::Elastomer);
+            for f in wave.iter().filter(|f| seen(f)) {
+                copy_listed_args(rec.encoder(), res, f.plan.slot);
+            }
+            for f in wave.iter().filter(|f| seen(f)) {
+                p.touched.dispatch_listed(rec, f.plan.slot, f.frame);
+            }
+            rec.stage_done(Stage::Select)?;
+            for f in wave.iter().filter(|f| seen(f)) {
+                copy_touched_args(rec.encoder(), res, f.plan.slot);
+            }
+            for f in wave.iter().filter(|f| seen(f)) {
+                p.camera.dispatch_touched(rec, f.plan.slot, f.frame);
+            }
+            if self.sensor.config.render.noise.any() {
+                let size = (self.sensor.width, self.sensor.height);
+                for f in wave {
+                    p.leds.record_noise(rec, f.frame, size);
+                }
+            }
+            rec.stage_done(Stage::Touched)?;
         }
-        rec.stage_done(Stage::SkinNormals)?;
-        // The tile list joins the normals' pass (both read the height map alone); the
-        // normals' map is refreshed after it.
-        if let Some(pixels) = plan.pixels {
-            p.touched.record_tiles(rec, pixels, frame);
-        }
-        if let Some(region) = plan.region {
-            p.elastomer.refresh_normals(rec, res, region);
-        }
-        if plan.pixels.is_some() {
-            p.touched.record_listed(rec, res, plan.slot, frame);
-        }
-        rec.stage_done(Stage::Select)?;
-        if plan.pixels.is_some() {
-            p.camera.record_touched(rec, res, plan.slot, frame);
-        }
-        if self.sensor.config.render.noise.any() {
-            let size = (self.sensor.width, self.sensor.height);
-            p.leds.record_noise(rec, frame, size);
-        }
-        rec.stage_done(Stage::Touched)
+        Ok(())
     }
 
     /// A frame's start: its image buffers hold its rect of the image, the reference's
     /// pixels there and zero indentation; its counters are zero (the touched list itself
     /// needs no clearing: only the places its counts hold are read); and the heightfield is
     /// zero over its region.
-    fn record_frame_start(&self, encoder: &mut wgpu::CommandEncoder, plan: &FramePlan) {
-        let res = &self.resources;
+    fn record_frame_start(&self, encoder: &mut wgpu::CommandEncoder, frame: &FrameWork) {
+        let (res, plan) = (&self.resources, frame.plan);
         if let Some(r) = plan.holding {
             let offset = plan.slot * res.slot_bytes;
             res.copy_reference(encoder, offset, r);
@@ -399,7 +482,7 @@ impl Renderer {
             Some(COUNTER_HEADER_BYTES),
         );
         if let Some(region) = plan.region {
-            res.heightfield.clear(encoder, Some(region));
+            frame.heightfield.clear(encoder, Some(region));
         }
     }
 }

@@ -55,6 +55,17 @@ pub fn default_batch(adapter: &wgpu::AdapterInfo) -> usize {
     }
 }
 
+/// Frames of a submission whose stages are recorded side by side unless told otherwise
+/// ([`Renderer::set_lanes`]): one on a software device, where the frames' work runs on the
+/// same cores either way, a batch's worth on a GPU, where one frame's stage is too little
+/// work to fill it and each pass and copy between stages costs its own fixed time.
+pub fn default_lanes(adapter: &wgpu::AdapterInfo) -> usize {
+    match adapter.device_type {
+        wgpu::DeviceType::Cpu => 1,
+        _ => default_batch(adapter),
+    }
+}
+
 /// A contact a frame of [`Renderer::render_scenes`] shows: its index in the frame's list of
 /// presses, and its labels.
 pub type Shown = (usize, GroundTruth);
@@ -95,8 +106,11 @@ pub struct Renderer {
     grid: HeightfieldGrid,
     resources: Resources,
     pipelines: Pipelines,
-    /// Texels the heightfield's maps may hold non-zero (the last frame's texel span).
-    dirty: Option<Rect>,
+    /// Per lane, the texels its heightfield's maps may hold non-zero (the texel span of the
+    /// last frame on it).
+    dirty: Vec<Option<Rect>>,
+    /// Frames recorded side by side, each on a heightfield of its own ([`Self::set_lanes`]).
+    lanes: usize,
     /// Frames recorded into one submission ([`Self::batch_frames`]).
     batch: usize,
     reference: Frame,
@@ -117,7 +131,9 @@ impl Renderer {
     pub fn on(sensor: &Sensor, ctx: &'static GpuContext) -> Result<Renderer> {
         let grid = HeightfieldGrid::for_sensor(sensor);
         let batch = default_batch(&ctx.adapter_info);
-        let resources = Resources::new(ctx, sensor, &grid, batch)?;
+        let lanes = default_lanes(&ctx.adapter_info);
+        let mut resources = Resources::new(ctx, sensor, &grid, batch)?;
+        resources.reserve_lanes(ctx, lanes);
         let constants = SensorUniform::new(sensor, &grid).pipeline_constants();
         let pipelines = Pipelines::new(ctx, &resources.pipeline_layout, constants)?;
         let mut renderer = Renderer {
@@ -126,7 +142,8 @@ impl Renderer {
             grid,
             resources,
             pipelines,
-            dirty: None,
+            dirty: vec![None; lanes],
+            lanes,
             batch,
             reference: Frame {
                 width: sensor.width,
@@ -165,6 +182,27 @@ impl Renderer {
         resources::check_frames(self.ctx, &self.sensor, frames)?;
         self.resources.reserve_frames(self.ctx, frames);
         self.batch = frames;
+        Ok(())
+    }
+
+    /// Frames of a submission recorded side by side ([`default_lanes`]).
+    pub fn lanes(&self) -> usize {
+        self.lanes
+    }
+
+    /// Records the stages of `lanes` frames (1 to [`MAX_BATCH`]) side by side from now on:
+    /// each stage of each of them before the next stage, each frame on a heightfield of its
+    /// own (`lanes` heightfields held). The frames are the same whatever it is.
+    pub fn set_lanes(&mut self, lanes: usize) -> Result<()> {
+        if !(1..=MAX_BATCH).contains(&lanes) {
+            return Err(GeltipError::input(
+                "lanes",
+                format!("{lanes} frames side by side; 1 to {MAX_BATCH}"),
+            ));
+        }
+        self.resources.reserve_lanes(self.ctx, lanes);
+        self.dirty.resize(lanes.max(self.dirty.len()), None);
+        self.lanes = lanes;
         Ok(())
     }
 
@@ -394,7 +432,8 @@ impl Renderer {
     /// never have run, or run in part): the next frame clears all of it.
     fn forget_heightfield_on_error<T>(&mut self, result: Result<T>) -> Result<T> {
         if result.is_err() {
-            self.dirty = Some(self.resources.heightfield.whole());
+            let whole = self.resources.heightfields[0].whole();
+            self.dirty.iter_mut().for_each(|d| *d = Some(whole));
         }
         result
     }

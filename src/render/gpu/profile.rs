@@ -36,9 +36,15 @@ impl Renderer {
         let plan = self.plan(0, contacts, 0);
         let (groups, binds) = self.bind_frames(std::slice::from_ref(&plan), [contacts].into_iter());
         let mut rec = Recorder::profiling(self.ctx, &self.resources.dispatch_args);
-        if let Some(binds) = binds.first() {
-            self.record_frame(&mut rec, &plan, contacts, binds, &groups.groups, &offsets)?;
-        }
+        let plans = std::slice::from_ref(&plan);
+        let work = self.frame_work(
+            plans,
+            [contacts].into_iter(),
+            &binds,
+            &groups.groups,
+            &offsets,
+        );
+        self.record_frames(&mut rec, &work)?;
         let mut out: Vec<(&'static str, Duration)> = rec
             .finish_profile()?
             .into_iter()

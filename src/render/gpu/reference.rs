@@ -15,7 +15,7 @@ impl Renderer {
     pub fn render_reference(&mut self) -> Result<()> {
         let rendered = self.record_reference();
         self.forget_heightfield_on_error(rendered)?;
-        self.dirty = None;
+        self.dirty[0] = None;
         let start = Instant::now();
         let rgba = self.read_whole_image()?;
         let (w, h) = (self.sensor.width, self.sensor.height);
@@ -43,14 +43,15 @@ impl Renderer {
             uniform: &uniform,
             uniform_offset: 0,
             slot: 0,
+            lane: 0,
             grid: &res.empty_grid,
         };
         let bind = res.bind_group(&self.ctx.device, binding);
         let whole = whole_image(&self.sensor);
         let mut rec = Recorder::new(self.ctx, &res.dispatch_args);
-        res.heightfield.clear(rec.encoder(), None);
+        res.heightfields[0].clear(rec.encoder(), None);
         for map in Map::ALL {
-            res.heightfield.refresh(rec.encoder(), map, None);
+            res.heightfields[0].refresh(rec.encoder(), map, None);
         }
         p.camera.record_reference(&mut rec, &bind, whole);
         p.touched

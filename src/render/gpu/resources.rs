@@ -23,7 +23,9 @@ pub(super) struct Resources {
     pub layout: wgpu::BindGroupLayout,
     pub pipeline_layout: wgpu::PipelineLayout,
     pub sensor: wgpu::Buffer,
-    pub heightfield: Heightfield,
+    /// A heightfield per lane: the frames of a submission whose stages are recorded side by
+    /// side each work on their own ([`super::Renderer::set_lanes`]).
+    pub heightfields: Vec<Heightfield>,
     /// Per pixel, where its ray crosses the shell (written by the reference frame); then
     /// per tile of pixels, the texels those crossings read (`probe_tiles_of_rays`).
     pub probes: wgpu::Buffer,
@@ -317,7 +319,7 @@ impl Resources {
                     contents: bytemuck::bytes_of(&SensorUniform::new(sensor, grid)),
                     usage: wgpu::BufferUsages::UNIFORM,
                 }),
-            heightfield: Heightfield::new(ctx, grid.texels),
+            heightfields: vec![Heightfield::new(ctx, grid.texels)],
             probes: storage(ctx, "geltip ray probes", probes_bytes(sensor), none),
             probe_map: map_texture(
                 ctx,
@@ -414,6 +416,14 @@ impl Resources {
             mapped_at_creation: false,
         });
         self.frames = frames;
+    }
+
+    /// Makes `heightfields` hold at least `lanes` (new ones are zero, as wgpu makes them).
+    pub fn reserve_lanes(&mut self, ctx: &GpuContext, lanes: usize) {
+        let texels = self.heightfields[0].texels;
+        while self.heightfields.len() < lanes {
+            self.heightfields.push(Heightfield::new(ctx, texels));
+        }
     }
 
     /// Makes `staging` take `bytes` (kept for the submissions after).

@@ -1,6 +1,6 @@
-//! Each stage records its own passes, and refreshes the maps of what it wrote (the samplers
-//! of the stages after it read those: see `shaders/shared/common.wgsl`). The order of the
-//! stages in a frame is [`super::frame`]'s.
+//! Each stage records its own dispatches; the copies between them (the maps' refreshes, the
+//! indirect dispatches' arguments) are [`super::frame`]'s, which orders the stages of a
+//! submission's frames.
 
 use super::layout::{
     dispatch_args_at, groups, DEEP_DISPATCH, DISPATCH_ARGS_BYTES, LIST_WORKGROUP,
@@ -11,7 +11,7 @@ use super::pipelines::{
     CameraPipelines, ContactPipelines, ElastomerPipelines, LedsPipelines, TouchedPipelines,
 };
 use super::record::{Groups, Recorder};
-use super::resources::{Map, Resources};
+use super::resources::Resources;
 use crate::error::Result;
 use crate::render::touched::{tile_grid, tiles_over};
 use crate::render::Rect;
@@ -30,72 +30,39 @@ pub(super) struct ContactPass<'a> {
 }
 
 impl ContactPipelines {
-    /// Stage 1: each contact's pass over its pressed rect, with its object's pipeline, its
-    /// own penetration copied out before the next pass; then the penetration map over
-    /// `region`. Each pass keeps the deepest press of a texel, so the frame's contacts press
-    /// the skin together.
-    pub fn record<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        res: &Resources,
-        contacts: &[ContactPass<'a>],
-        region: Rect,
-    ) -> Result<()> {
-        for c in contacts {
-            rec.dispatch(self.of(c.kind)?, c.bind, Groups::over(c.pressed));
-            let fields = &res.penetration_fields;
-            res.heightfield
-                .copy_field(rec.encoder(), c.pressed, fields, c.field_offset);
-        }
-        res.heightfield
-            .refresh(rec.encoder(), Map::Penetration, Some(region));
+    /// Stage 1, one contact's pass over its pressed rect, with its object's pipeline (each
+    /// pass keeps the deepest press of a texel, so a frame's contacts press the skin
+    /// together). Its own penetration is copied out ([`super::resources::Heightfield::copy_field`]) before its
+    /// frame's next contact pass, and the penetration map refreshed after the last.
+    pub fn dispatch<'a>(&'a self, rec: &mut Recorder<'a>, c: &ContactPass<'a>) -> Result<()> {
+        rec.dispatch(self.of(c.kind)?, c.bind, Groups::over(c.pressed));
         Ok(())
     }
 }
 
 impl ElastomerPipelines {
-    /// Stage 2's blends: along meridians over `meridians`, then along parallels over
-    /// `texels`, each pass followed by its map's refresh over `region`.
-    pub fn record_meridians<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        res: &Resources,
-        meridians: &Pieces<'a>,
-        region: Rect,
-    ) {
+    /// Stage 2's blends along meridians over `meridians`, into the pending pass; the
+    /// elastomer map's refresh follows.
+    pub fn dispatch_meridians<'a>(&'a self, rec: &mut Recorder<'a>, meridians: &Pieces<'a>) {
         for &(r, bind) in meridians {
             rec.dispatch(&self.meridians, bind, Groups::over(r));
         }
-        res.heightfield
-            .refresh(rec.encoder(), Map::Elastomer, Some(region));
     }
 
-    pub fn record_parallels<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        res: &Resources,
-        texels: &Pieces<'a>,
-        region: Rect,
-    ) {
+    /// Then along parallels over `texels`; the height map's refresh follows.
+    pub fn dispatch_parallels<'a>(&'a self, rec: &mut Recorder<'a>, texels: &Pieces<'a>) {
         for &(r, bind) in texels {
             rec.dispatch(&self.parallels, bind, Groups::over(r));
         }
-        res.heightfield
-            .refresh(rec.encoder(), Map::Height, Some(region));
     }
 
-    /// The skin's normals over `texels`, into the pending pass: [`Self::refresh_normals`]
+    /// The skin's normals over `texels`, into the pending pass: the elastomer map's refresh
     /// follows once the selection's first pass has joined it (both read the height map
     /// alone).
     pub fn record_normals<'a>(&'a self, rec: &mut Recorder<'a>, texels: &Pieces<'a>) {
         for &(r, bind) in texels {
             rec.dispatch(&self.skin_normals, bind, Groups::over(r));
         }
-    }
-
-    pub fn refresh_normals(&self, rec: &mut Recorder, res: &Resources, region: Rect) {
-        res.heightfield
-            .refresh(rec.encoder(), Map::Elastomer, Some(region));
     }
 }
 
@@ -131,24 +98,38 @@ impl TouchedPipelines {
     }
 
     /// The touched list of the frame in `slot`, from the listed tiles: a pass sized by the
-    /// tile list.
-    pub fn record_listed<'a>(
+    /// tile list, whose arguments [`copy_listed_args`] copied.
+    pub fn dispatch_listed<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
-        res: &Resources,
         slot: u64,
         bind: &'a wgpu::BindGroup,
     ) {
         let args = slot * DISPATCH_ARGS_BYTES + dispatch_args_at(SELECT_DISPATCH);
-        rec.encoder().copy_buffer_to_buffer(
-            &res.counters,
-            slot * res.counter_bytes + SELECT_DISPATCH as u64 * 4,
-            &res.dispatch_args,
-            args,
-            Some(12),
-        );
         rec.dispatch(&self.select_listed, bind, Groups::Indirect(args));
     }
+}
+
+/// The tile list's length in frame `slot`'s counters, as its touched list's dispatch.
+pub(super) fn copy_listed_args(encoder: &mut wgpu::CommandEncoder, res: &Resources, slot: u64) {
+    encoder.copy_buffer_to_buffer(
+        &res.counters,
+        slot * res.counter_bytes + SELECT_DISPATCH as u64 * 4,
+        &res.dispatch_args,
+        slot * DISPATCH_ARGS_BYTES + dispatch_args_at(SELECT_DISPATCH),
+        Some(12),
+    );
+}
+
+/// The touched list's lengths in frame `slot`'s counters, as the camera's two dispatches.
+pub(super) fn copy_touched_args(encoder: &mut wgpu::CommandEncoder, res: &Resources, slot: u64) {
+    encoder.copy_buffer_to_buffer(
+        &res.counters,
+        slot * res.counter_bytes + SHALLOW_DISPATCH as u64 * 4,
+        &res.dispatch_args,
+        slot * DISPATCH_ARGS_BYTES + dispatch_args_at(SHALLOW_DISPATCH),
+        Some(TOUCHED_ARGS_BYTES),
+    );
 }
 
 impl CameraPipelines {
@@ -163,22 +144,14 @@ impl CameraPipelines {
     }
 
     /// Stage 3 of a contact frame: the passes over the touched list of the frame in `slot`,
-    /// the shallow pixels' and the deep ones', sized by it.
-    pub fn record_touched<'a>(
+    /// the shallow pixels' and the deep ones', sized by it ([`copy_touched_args`]).
+    pub fn dispatch_touched<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
-        res: &Resources,
         slot: u64,
         bind: &'a wgpu::BindGroup,
     ) {
         let args = slot * DISPATCH_ARGS_BYTES;
-        rec.encoder().copy_buffer_to_buffer(
-            &res.counters,
-            slot * res.counter_bytes + SHALLOW_DISPATCH as u64 * 4,
-            &res.dispatch_args,
-            args + dispatch_args_at(SHALLOW_DISPATCH),
-            Some(TOUCHED_ARGS_BYTES),
-        );
         let (shallow, deep) = (
             args + dispatch_args_at(SHALLOW_DISPATCH),
             args + dispatch_args_at(DEEP_DISPATCH),
