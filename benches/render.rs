@@ -1,13 +1,15 @@
 //! Renderer throughput at the paper sensor's 640x480, printed as a table:
 //! `cargo bench --bench render` (add `-- --frames N` for more frames per pass, `-- --sensor
 //! <preset|file.toml>` for another sensor, `-- --batch 8,64,256` for the batch rows' frames
-//! per submission (default 8 and the device's default); `-- --host-phases N` prints only one contact per
+//! per submission (default 8 and the device's default), `-- --lanes 16,64` for the frames
+//! of a submission recorded side by side in them (default the device's); `-- --host-phases N` prints only one contact per
 //! submit over N passes, by the host's speed before each).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
-//! into CPU preparation, GPU render (submit + wait, the copies for reading back included) and
-//! readback (unpacking the mapped frames), with the pixels re-rendered per frame; two
+//! into CPU preparation, GPU render (record, submit and wait, the copies for reading back
+//! included; `record`: its CPU share until the submission) and readback (unpacking the
+//! mapped frames), with the pixels re-rendered per frame; two
 //! renderers on devices of their own, one contact per submit each on its own thread (fps
 //! over both); one and two non-overlapping contacts per frame (`render_scene`); and the CPU
 //! alternative (the CPU mirrors over the same footprint, on rayon's threads). Each row is the
@@ -65,12 +67,13 @@ fn row(name: &str, passes: &mut [Pass]) {
         passes[passes.len() - 1].fps()
     );
     println!(
-        "| {name:<28} | {:>6} | {:>8.1} | {range:>9} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.0} | {:>7.2} |",
+        "| {name:<30} | {:>6} | {:>8.1} | {range:>9} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.3} | {:>8.2} | {:>8.0} | {:>7.2} |",
         p.frames,
         p.fps(),
         per(p.wall),
         per(p.t.prepare),
         per(p.t.render),
+        per(p.t.record),
         per(p.t.readback),
         p.t.touched_pixels as f64 / p.frames as f64,
         p.host.all_cores_ms,
@@ -193,6 +196,19 @@ where
     }
 }
 
+/// A comma-separated list of counts after `name` (`--batch 8,64,256`).
+fn counts(args: &[String], name: &str) -> anyhow::Result<Option<Vec<usize>>> {
+    let Some(list) = arg::<String>(args, name)? else {
+        return Ok(None);
+    };
+    let counts = list
+        .split(',')
+        .map(|n| n.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!("{name} {list:?}: {e}"))?;
+    Ok(Some(counts))
+}
+
 fn main() -> anyhow::Result<()> {
     // As the geltip binary does (see geltip::memory); GELTIP_FREE_MEMORY=1 measures without.
     let kept =
@@ -242,17 +258,10 @@ fn main() -> anyhow::Result<()> {
     if let Some(n) = arg::<usize>(&args, "--host-phases")? {
         return host_phases(&mut r, &list, n.max(1));
     }
-    let batches: Vec<usize> = match arg::<String>(&args, "--batch")? {
-        Some(list) => list
-            .split(',')
-            .map(|n| n.trim().parse::<usize>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| anyhow::anyhow!("--batch {list:?}: {e}"))?,
-        None => vec![8, r.batch_frames()],
-    };
-    let mut batches = batches;
+    let mut batches = counts(&args, "--batch")?.unwrap_or(vec![8, r.batch_frames()]);
     batches.dedup();
-    let single = gpu_rows(&mut r, &solids, &list, (repeat, &batches))?;
+    let lanes = counts(&args, "--lanes")?.unwrap_or(vec![r.lanes()]);
+    let single = gpu_rows(&mut r, &solids, &list, (repeat, &batches, &lanes))?;
     cpu_row(&r, &list, repeat)?;
     stage_table(&mut r, &list)?;
     let per_frame = |f: fn(&Timings) -> u64| {
@@ -272,7 +281,7 @@ fn main() -> anyhow::Result<()> {
 
 fn print_table_header() {
     println!(
-        "| {:<28} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>7} |",
+        "| {:<30} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>7} |",
         "what",
         "frames",
         "fps",
@@ -280,13 +289,14 @@ fn print_table_header() {
         "ms/frame",
         "prepare",
         "render",
+        "record",
         "readback",
         "touched",
         "host ms"
     );
     println!(
-        "|{:-<30}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->9}|",
-        "", "", "", "", "", "", "", "", "", ""
+        "|{:-<32}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->9}|",
+        "", "", "", "", "", "", "", "", "", "", ""
     );
 }
 
@@ -297,7 +307,7 @@ fn gpu_rows(
     r: &mut Renderer,
     solids: &[Arc<Object>],
     list: &[Press],
-    (repeat, batches): (usize, &[usize]),
+    (repeat, batches, lane_counts): (usize, &[usize], &[usize]),
 ) -> anyhow::Result<Vec<Pass>> {
     let frames = list.len();
     let mut single = passes(repeat, frames, || one_per_submit(r, list))?;
@@ -326,15 +336,21 @@ fn gpu_rows(
     // while this one renders), as a streaming consumer calls it: the frames of each call
     // (four submissions) are dropped before the next (keeping all of them would time the
     // allocator's fresh pages, not the renderer).
-    let default = r.batch_frames();
+    let default = (r.batch_frames(), r.lanes());
     for &n in batches {
         r.set_batch_frames(n)?;
-        let mut batched = passes(repeat, frames, || {
-            each(r, list.chunks(4 * n), |r, batch| r.render_batch(batch))
-        })?;
-        row(&format!("batches of {n} contacts"), &mut batched);
+        let mut lanes: Vec<usize> = lane_counts.iter().map(|&l| l.min(n)).collect();
+        lanes.dedup();
+        for l in lanes {
+            r.set_lanes(l)?;
+            let mut batched = passes(repeat, frames, || {
+                each(r, list.chunks(4 * n), |r, batch| r.render_batch(batch))
+            })?;
+            row(&format!("batches of {n}, {l} lanes"), &mut batched);
+        }
     }
-    r.set_batch_frames(default)?;
+    r.set_batch_frames(default.0)?;
+    r.set_lanes(default.1)?;
 
     // Several objects in one frame (Renderer::render_scene): each tap with its twin on the
     // opposite side of the finger (azimuth + 180: imprints that do not overlap), against the
@@ -360,7 +376,7 @@ fn gpu_rows(
     row("two contacts per scene", &mut two_scene);
     // The same scenes in batches (Renderer::render_scenes), at the largest batch.
     let scenes: Vec<Vec<Press>> = twins.iter().map(|t| t.to_vec()).collect();
-    let n = batches.iter().copied().max().unwrap_or(default);
+    let n = batches.iter().copied().max().unwrap_or(default.0);
     r.set_batch_frames(n)?;
     let mut two_batched = passes(repeat, frames, || {
         each(r, scenes.chunks(4 * n), |r, chunk| {
@@ -368,7 +384,7 @@ fn gpu_rows(
         })
     })?;
     row(&format!("two per scene, batches of {n}"), &mut two_batched);
-    r.set_batch_frames(default)?;
+    r.set_batch_frames(default.0)?;
     Ok(single)
 }
 

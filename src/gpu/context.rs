@@ -221,6 +221,16 @@ impl GpuContext {
         self.scoped(what, || self.queue.submit(Some(encoder.finish())))
     }
 
+    /// Submits command buffers recorded elsewhere (in order, in one submission), turning a
+    /// validation error into a `Gpu` error that names `what`.
+    pub fn submit_buffers(
+        &self,
+        what: &str,
+        buffers: Vec<wgpu::CommandBuffer>,
+    ) -> Result<wgpu::SubmissionIndex> {
+        self.scoped(what, || self.queue.submit(buffers))
+    }
+
     /// [`GpuContext::submit`], then [`GpuContext::wait`].
     pub fn submit_and_wait(&self, what: &str, encoder: wgpu::CommandEncoder) -> Result<()> {
         let submission = self.submit(what, encoder)?;

@@ -178,6 +178,7 @@ impl Renderer {
         let mut timings = Timings {
             prepare,
             render: read.mapped - start,
+            record: read.submitted.saturating_duration_since(start),
             ..Timings::default()
         };
         for part in &read.frames {
@@ -238,17 +239,27 @@ impl Renderer {
             .map(|(slot, (contacts, seed))| self.plan(slot, contacts, *seed))
             .collect();
         let (groups, binds) = self.bind_frames(&plans, scenes.iter().map(|(c, _)| &c[..]));
-        let mut rec = Recorder::new(self.ctx, &self.resources.dispatch_args);
         let contacts_of = scenes.iter().map(|(c, _)| &c[..]);
         let work = self.frame_work(&plans, contacts_of, &binds, &groups.groups, &offsets);
-        self.record_frames(&mut rec, &work)?;
+        // One wave goes into the readback's submission; several are recorded side by side
+        // and submitted before it.
+        let encoder = if work.len() <= self.lanes {
+            let mut rec = Recorder::new(self.ctx, &self.resources.dispatch_args);
+            self.record_wave(&mut rec, &work)?;
+            rec.finish()
+        } else {
+            let recorded = self.record_frames(&work)?;
+            self.ctx.submit_buffers("rendering contacts", recorded)?;
+            self.ctx.device.create_command_encoder(&Default::default())
+        };
+        drop(work);
         let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
         let fields: Vec<Option<(u64, u64)>> = contacts
             .iter()
             .zip(offsets)
             .map(|(p, at)| p.footprint.map(|_| (at, p.field_bytes(self.grid.texels))))
             .collect();
-        self.read_frames("rendering contacts", rec.finish(), &rects, &fields)
+        self.read_frames("rendering contacts", encoder, &rects, &fields)
     }
 
     /// Where each contact's own penetration goes in the penetration fields, packed in order
@@ -387,81 +398,97 @@ impl Renderer {
         slot as usize % self.lanes
     }
 
-    /// Records the frames' stages: [`Renderer::lanes`] frames at a time, each stage of each
-    /// of them before the next stage, so that their dispatches share passes and the copies
-    /// between stages run together; each stage's end marked for a profile.
-    pub(super) fn record_frames<'a>(
+    /// Records the frames' stages, [`Renderer::lanes`] frames (a wave) to a command buffer,
+    /// the waves side by side on rayon's threads (what the CPU does for a frame, recording,
+    /// is then shared by the cores), each wave's errors caught on its own thread.
+    pub(super) fn record_frames(&self, frames: &[FrameWork]) -> Result<Vec<wgpu::CommandBuffer>> {
+        let args = &self.resources.dispatch_args;
+        frames
+            .par_chunks(self.lanes)
+            .map(|wave| {
+                let recorded = self.ctx.scoped("recording frames", || {
+                    let mut rec = Recorder::new(self.ctx, args);
+                    self.record_wave(&mut rec, wave)?;
+                    Ok(rec.finish().finish())
+                });
+                recorded?
+            })
+            .collect()
+    }
+
+    /// Records a wave of frames: each stage of each of them before the next stage, so that
+    /// their dispatches share passes and the copies between stages run together; each
+    /// stage's end marked for a profile.
+    pub(super) fn record_wave<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
-        frames: &[FrameWork<'a>],
+        wave: &[FrameWork<'a>],
     ) -> Result<()> {
         let (res, p) = (&self.resources, &self.pipelines);
         let pressed = |f: &FrameWork| f.plan.region.is_some();
         let seen = |f: &FrameWork| f.plan.pixels.is_some();
-        for wave in frames.chunks(self.lanes) {
-            for f in wave {
-                self.record_frame_start(rec.encoder(), f);
-            }
-            rec.stage_done(Stage::Start)?;
-            // Each frame's k-th contact, its own penetration copied out before the next.
-            let most = wave.iter().map(|f| f.contacts.len()).max().unwrap_or(0);
-            for k in 0..most {
-                for c in wave.iter().filter_map(|f| f.contacts.get(k)) {
-                    p.contact.dispatch(rec, c)?;
-                }
-                for f in wave {
-                    if let Some(c) = f.contacts.get(k) {
-                        let fields = &res.penetration_fields;
-                        f.heightfield
-                            .copy_field(rec.encoder(), c.pressed, fields, c.field_offset);
-                    }
-                }
-            }
-            refresh(rec, wave, Map::Penetration);
-            rec.stage_done(Stage::Contact)?;
-            for f in wave.iter().filter(|f| pressed(f)) {
-                p.elastomer.dispatch_meridians(rec, &f.meridians);
-            }
-            refresh(rec, wave, Map::Elastomer);
-            rec.stage_done(Stage::Meridians)?;
-            for f in wave.iter().filter(|f| pressed(f)) {
-                p.elastomer.dispatch_parallels(rec, &f.texels);
-            }
-            refresh(rec, wave, Map::Height);
-            rec.stage_done(Stage::Parallels)?;
-            for f in wave.iter().filter(|f| pressed(f)) {
-                p.elastomer.record_normals(rec, &f.texels);
-            }
-            rec.stage_done(Stage::SkinNormals)?;
-            // The tile lists join the normals' pass (both read the height map alone); the
-            // normals' maps are refreshed after it.
-            for f in wave {
-                if let Some(pixels) = f.plan.pixels {
-                    p.touched.record_tiles(rec, pixels, f.frame);
-                }
-            }
-            refresh(rec, wave, Map::Elastomer);
-            for f in wave.iter().filter(|f| seen(f)) {
-                copy_listed_args(rec.encoder(), res, f.plan.slot);
-            }
-            for f in wave.iter().filter(|f| seen(f)) {
-                p.touched.dispatch_listed(rec, f.plan.slot, f.frame);
-            }
-            rec.stage_done(Stage::Select)?;
-            for f in wave.iter().filter(|f| seen(f)) {
-                copy_touched_args(rec.encoder(), res, f.plan.slot);
-            }
-            for f in wave.iter().filter(|f| seen(f)) {
-                p.camera.dispatch_touched(rec, f.plan.slot, f.frame);
-            }
-            if self.sensor.config.render.noise.any() {
-                let size = (self.sensor.width, self.sensor.height);
-                for f in wave {
-                    p.leds.record_noise(rec, f.frame, size);
-                }
-            }
-            rec.stage_done(Stage::Touched)?;
+        for f in wave {
+            self.record_frame_start(rec.encoder(), f);
         }
+        rec.stage_done(Stage::Start)?;
+        // Each frame's k-th contact, its own penetration copied out before the next.
+        let most = wave.iter().map(|f| f.contacts.len()).max().unwrap_or(0);
+        for k in 0..most {
+            for c in wave.iter().filter_map(|f| f.contacts.get(k)) {
+                p.contact.dispatch(rec, c)?;
+            }
+            for f in wave {
+                if let Some(c) = f.contacts.get(k) {
+                    let fields = &res.penetration_fields;
+                    f.heightfield
+                        .copy_field(rec.encoder(), c.pressed, fields, c.field_offset);
+                }
+            }
+        }
+        refresh(rec, wave, Map::Penetration);
+        rec.stage_done(Stage::Contact)?;
+        for f in wave.iter().filter(|f| pressed(f)) {
+            p.elastomer.dispatch_meridians(rec, &f.meridians);
+        }
+        refresh(rec, wave, Map::Elastomer);
+        rec.stage_done(Stage::Meridians)?;
+        for f in wave.iter().filter(|f| pressed(f)) {
+            p.elastomer.dispatch_parallels(rec, &f.texels);
+        }
+        refresh(rec, wave, Map::Height);
+        rec.stage_done(Stage::Parallels)?;
+        for f in wave.iter().filter(|f| pressed(f)) {
+            p.elastomer.record_normals(rec, &f.texels);
+        }
+        rec.stage_done(Stage::SkinNormals)?;
+        // The tile lists join the normals' pass (both read the height map alone); the
+        // normals' maps are refreshed after it.
+        for f in wave {
+            if let Some(pixels) = f.plan.pixels {
+                p.touched.record_tiles(rec, pixels, f.frame);
+            }
+        }
+        refresh(rec, wave, Map::Elastomer);
+        for f in wave.iter().filter(|f| seen(f)) {
+            copy_listed_args(rec.encoder(), res, f.plan.slot);
+        }
+        for f in wave.iter().filter(|f| seen(f)) {
+            p.touched.dispatch_listed(rec, f.plan.slot, f.frame);
+        }
+        rec.stage_done(Stage::Select)?;
+        for f in wave.iter().filter(|f| seen(f)) {
+            copy_touched_args(rec.encoder(), res, f.plan.slot);
+        }
+        for f in wave.iter().filter(|f| seen(f)) {
+            p.camera.dispatch_touched(rec, f.plan.slot, f.frame);
+        }
+        if self.sensor.config.render.noise.any() {
+            let size = (self.sensor.width, self.sensor.height);
+            for f in wave {
+                p.leds.record_noise(rec, f.frame, size);
+            }
+        }
+        rec.stage_done(Stage::Touched)?;
         Ok(())
     }
 

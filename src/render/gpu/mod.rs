@@ -57,14 +57,20 @@ pub fn default_batch(adapter: &wgpu::AdapterInfo) -> usize {
 
 /// Frames of a submission whose stages are recorded side by side unless told otherwise
 /// ([`Renderer::set_lanes`]): one on a software device, where the frames' work runs on the
-/// same cores either way, a batch's worth on a GPU, where one frame's stage is too little
-/// work to fill it and each pass and copy between stages costs its own fixed time.
-pub fn default_lanes(adapter: &wgpu::AdapterInfo) -> usize {
+/// same cores either way; on a GPU, where one frame's stage is too little work to fill it
+/// and each pass and copy between stages costs its own fixed time, a batch's worth, as many
+/// as [`LANES_BYTES`] of heightfields hold (a lane's heightfield of `texels` per side takes
+/// 48 bytes a texel, its buffers and maps).
+pub fn default_lanes(adapter: &wgpu::AdapterInfo, texels: u32) -> usize {
+    let lane_bytes = 48 * texels as u64 * texels as u64;
     match adapter.device_type {
         wgpu::DeviceType::Cpu => 1,
-        _ => default_batch(adapter),
+        _ => (LANES_BYTES / lane_bytes.max(1)).clamp(1, default_batch(adapter) as u64) as usize,
     }
 }
+
+/// GPU memory the default lanes' heightfields take at most.
+pub const LANES_BYTES: u64 = 256 << 20;
 
 /// A contact a frame of [`Renderer::render_scenes`] shows: its index in the frame's list of
 /// presses, and its labels.
@@ -81,6 +87,9 @@ pub struct Timings {
     pub render: Duration,
     /// Unpacking the mapped frames into images and labels.
     pub readback: Duration,
+    /// Of `render`, the CPU's share: planning, binding and recording the frames until the
+    /// submission (the rest is the GPU's work and the wait for it).
+    pub record: Duration,
     /// Pixels the camera and LED stages re-rendered (the touched lists' lengths), summed.
     pub touched_pixels: u64,
     /// Tiles of 8 x 8 pixels whose pixels the touched lists were chosen from (the tile
@@ -94,6 +103,7 @@ impl Timings {
         self.prepare += other.prepare;
         self.render += other.render;
         self.readback += other.readback;
+        self.record += other.record;
         self.touched_pixels += other.touched_pixels;
         self.listed_tiles += other.listed_tiles;
     }
@@ -131,7 +141,7 @@ impl Renderer {
     pub fn on(sensor: &Sensor, ctx: &'static GpuContext) -> Result<Renderer> {
         let grid = HeightfieldGrid::for_sensor(sensor);
         let batch = default_batch(&ctx.adapter_info);
-        let lanes = default_lanes(&ctx.adapter_info);
+        let lanes = default_lanes(&ctx.adapter_info, grid.texels);
         let mut resources = Resources::new(ctx, sensor, &grid, batch)?;
         resources.reserve_lanes(ctx, lanes);
         let constants = SensorUniform::new(sensor, &grid).pipeline_constants();

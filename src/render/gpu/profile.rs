@@ -44,7 +44,7 @@ impl Renderer {
             &groups.groups,
             &offsets,
         );
-        self.record_frames(&mut rec, &work)?;
+        self.record_wave(&mut rec, &work)?;
         let mut out: Vec<(&'static str, Duration)> = rec
             .finish_profile()?
             .into_iter()

@@ -26,6 +26,8 @@ pub(super) struct ReadFrames {
     pub frames: Vec<FrameParts>,
     pub fields: Vec<Vec<f32>>,
     pub mapped: Instant,
+    /// When the work was submitted.
+    pub submitted: Instant,
 }
 
 impl Renderer {
@@ -58,6 +60,7 @@ impl Renderer {
         let staging = &self.resources.staging;
         record_ranges(&mut encoder, staging, &ranges)?;
         let submission = self.ctx.submit(what, encoder)?;
+        let submitted = Instant::now();
         // Each frame as the reference's pixels and zero indentation, laid out while the GPU
         // works: this thread would only wait, and after the wait only the rects read are
         // left to copy over them.
@@ -102,6 +105,7 @@ impl Renderer {
             frames,
             fields: read_fields,
             mapped,
+            submitted,
         })
     }
 

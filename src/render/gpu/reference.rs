@@ -26,6 +26,7 @@ impl Renderer {
             prepare: Duration::ZERO,
             render,
             readback: start.elapsed(),
+            record: Duration::ZERO,
             touched_pixels: (w * h) as u64,
             listed_tiles: 0,
         };
