@@ -214,6 +214,8 @@ def evaluate(
     gate_mm: Optional[float] = 3.0,
     name: Optional[str] = None,
     compare: Optional[_Path] = None,
+    real: Optional[_Path] = None,
+    threshold: Optional[float] = None,
 ) -> Dict[str, Any]:
     """The native half of `geltip.evaluate`: `detector` answers each frame with its
     detections as JSON text (or names a built-in localiser). Returns {"summary", "tables",

@@ -89,15 +89,20 @@ def evaluate(
     gate_mm: Optional[float] = 3.0,
     name: Optional[str] = None,
     compare: Optional[Union[str, PathLike]] = None,
+    real: Optional[Union[str, PathLike]] = None,
+    threshold: Optional[float] = None,
 ) -> EvaluationReport:
-    """Scores ``detector`` on a set from ``geltip dataset`` (``dataset=``) or a suite
-    rendered on the fly (``suite="paper"`` or ``"stability"``, with ``sensor=``).
+    """Scores ``detector`` on a set from ``geltip dataset`` (``dataset=``), a suite
+    rendered on the fly (``suite="paper"`` or ``"stability"``, with ``sensor=``), or a real
+    sensor's labelled frames (``real=``: a set file or the AllSight ``labels.json``, with the
+    ``sensor=`` that took them; ``summary["rows"]`` per group, ``per_sample`` empty).
 
     ``detector(image, reference, sensor)`` gets each frame and its empty frame as
     (H, W, 3) uint8 arrays and the frame's ``geltip.Sensor``, and returns a list of
     detections: dicts with ``"pixel": [u, v]`` or ``"point": [x, y, z]`` (mm, camera
     frame) and an optional ``"confidence"``. ``"surface"``, ``"paper"`` or ``"change"`` names a
-    built-in localiser instead. Detections are matched one to one to the visible
+    built-in localiser instead (``threshold``: the change method's decision threshold, in
+    noise spreads). Detections are matched one to one to the visible
     contacts within ``gate_mm`` (None: any distance). With ``out``, the report's files
     (summary.json, per_sample.jsonl, tables.md, charts) are written there, beside
     ``compare``'s (another run's output directory). An exception the detector raises
@@ -122,7 +127,10 @@ def evaluate(
         gate_mm=gate_mm,
         name=name,
         compare=compare,
+        real=real,
+        threshold=threshold,
     )
     return EvaluationReport(
-        summary=r["summary"], tables=r["tables"], per_sample=r["per_sample"], files=r["files"]
+        summary=r["summary"], tables=r["tables"], per_sample=r.get("per_sample", []),
+        files=r["files"],
     )

@@ -4,7 +4,7 @@
 //! half converts what the user's function returns); the library checks them.
 
 use crate::convert::{json_to_py, path_or_str};
-use crate::errors::{bad, detached};
+use crate::errors::{bad, detached, lib};
 use crate::sensor::Sensor;
 use geltip::evaluate::{
     detections::detections_from_json, Detector, Found, MethodDetector, Named, Sample,
@@ -87,13 +87,15 @@ impl Detector for PyDetector {
     }
 }
 
-/// Scores `detector` (a function `(image, reference, sensor) -> JSON text`, or "surface" or
-/// "paper") on a dataset's directory or a suite ("paper", "stability", with `sensor`), with
-/// the matching gate `gate_mm` (None: any distance). With `out`, the report's files go
-/// there, beside `compare`'s (another run's output directory). Returns {"summary",
-/// "tables", "per_sample", "files"}.
+/// Scores `detector` (a function `(image, reference, sensor) -> JSON text`, or "surface",
+/// "paper" or "change", whose decision `threshold` may be given) on a dataset's directory or
+/// a suite ("paper", "stability", with `sensor`), with the matching gate `gate_mm` (None:
+/// any distance), or on a real sensor's labelled frames (`real`: a set file or the AllSight
+/// labels.json, with the `sensor` that took them). With `out`, the report's files go there,
+/// beside `compare`'s (another run's output directory). Returns {"summary", "tables",
+/// "per_sample", "files"} ({"summary", "tables", "files"} for real frames).
 #[pyfunction]
-#[pyo3(signature = (detector, *, dataset = None, suite = None, sensor = None, out = None, gate_mm = Some(3.0), name = None, compare = None))]
+#[pyo3(signature = (detector, *, dataset = None, suite = None, sensor = None, out = None, gate_mm = Some(3.0), name = None, compare = None, real = None, threshold = None))]
 #[allow(clippy::too_many_arguments)] // The keyword arguments of geltip.evaluate, one each.
 pub fn evaluate<'py>(
     py: Python<'py>,
@@ -105,15 +107,18 @@ pub fn evaluate<'py>(
     gate_mm: Option<f64>,
     name: Option<String>,
     compare: Option<&Bound<'py, PyAny>>,
+    real: Option<&Bound<'py, PyAny>>,
+    threshold: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let path = |field: &str, v: Option<&Bound<'py, PyAny>>| -> PyResult<Option<PathBuf>> {
         v.map(|v| path_or_str(field, v).map(PathBuf::from))
             .transpose()
     };
-    let (dataset, out, compare) = (
+    let (dataset, out, compare, real) = (
         path("dataset", dataset)?,
         path("out", out)?,
         path("compare", compare)?,
+        path("real", real)?,
     );
     let sensor = sensor
         .map(|s| Sensor::of(py, Some(s)).map(|s| s.get().inner.clone()))
@@ -125,7 +130,9 @@ pub fn evaluate<'py>(
             GeltipError::InvalidInput { reason, .. } => bad("detector", reason),
             other => to_py(other),
         })?;
-        Box::new(MethodDetector::new(method))
+        Box::new(lib(MethodDetector::with_threshold(method, threshold))?)
+    } else if threshold.is_some() {
+        return Err(bad("threshold", "applies to the method 'change'"));
     } else if detector.is_callable() {
         Box::new(PyDetector {
             function: detector.clone().unbind(),
@@ -139,6 +146,21 @@ pub fn evaluate<'py>(
         ));
     };
     let mut detector = Named::new(inner, name);
+    if let Some(set) = real {
+        let sensor = sensor.ok_or_else(|| bad("real", "name the sensor that took the frames"))?;
+        let outcome = detached(py, "evaluating", || {
+            job::run_real(&set, &sensor, &mut detector, out.as_deref(), |_, _| {})
+        });
+        let outcome = match outcome {
+            Ok(o) => o,
+            Err(e) => return Err(raised.lock().ok().and_then(|mut r| r.take()).unwrap_or(e)),
+        };
+        let report = PyDict::new(py);
+        report.set_item("summary", json_to_py(py, &outcome.report.summary())?)?;
+        report.set_item("tables", outcome.report.tables())?;
+        report.set_item("files", outcome.files)?;
+        return Ok(report.into_any());
+    }
     let outcome = detached(py, "evaluating", || {
         let source = job::source(dataset.as_deref(), suite.as_deref(), sensor.as_ref())?;
         job::run(

@@ -144,12 +144,12 @@ impl Simulator {
     /// default; 1 to `MAX_BATCH`. The frames are the same whatever it is.
     #[getter]
     fn batch_frames(&self) -> PyResult<usize> {
-        Ok(self.pool()?.batch_frames())
+        Ok(lib(self.pool())?.batch_frames())
     }
 
     #[setter]
     fn set_batch_frames(&self, frames: usize) -> PyResult<()> {
-        Ok(self.pool()?.set_batch_frames(frames)?)
+        lib(lib(self.pool())?.set_batch_frames(frames))
     }
 
     fn __repr__(&self) -> String {

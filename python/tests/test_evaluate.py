@@ -1,6 +1,7 @@
 """geltip.evaluate: a Python detector scored like `geltip evaluate` scores a file or a
 program (the same summary), built-in localisers by name, exceptions and bad answers."""
 import json
+from pathlib import Path
 import sys
 
 import numpy as np
@@ -139,3 +140,24 @@ def test_bad_arguments(mixed_set):
         geltip.evaluate("surface", dataset=mixed_set, sensor="paper")
     with pytest.raises(geltip.InvalidArgumentError, match="gate_mm: must be a positive"):
         geltip.evaluate("surface", dataset=mixed_set, gate_mm=-1)
+
+
+REAL = Path(__file__).resolve().parents[2] / ".." / "shared" / "real" / "allsight"
+
+
+def test_real_frames_and_the_change_threshold(tmp_path):
+    """Real labelled frames (../shared/real, skipped where absent): a drift-only pair is no
+    contact for the change method, a contact at threshold 0.5; a threshold for another
+    method is refused."""
+    with pytest.raises(ValueError, match="threshold"):
+        geltip.evaluate("surface", suite="paper", sensor="paper", threshold=5)
+    if not REAL.is_dir():
+        pytest.skip(f"{REAL} is absent (real sensor frames)")
+    line = {"image": str(REAL / "s1_image2_0.03_0.jpg"),
+            "reference": str(REAL / "s1_ref_frame.jpg"), "contact": False, "group": "drift"}
+    (tmp_path / "set.jsonl").write_text(json.dumps(line) + "\n")
+    for threshold, false_contacts in ((None, 0), (0.5, 1)):
+        report = geltip.evaluate("change", real=tmp_path / "set.jsonl", sensor="allsight",
+                                 threshold=threshold, out=tmp_path / "out")
+        assert report.summary["rows"][-1]["false_contacts"] == false_contacts, report.tables
+        assert "summary.json" in report.files

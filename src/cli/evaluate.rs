@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 #[derive(Args)]
-#[command(group(ArgGroup::new("frames").required(true).args(["dataset", "suite"])))]
+#[command(group(ArgGroup::new("frames").required(true).args(["dataset", "suite", "real"])))]
 #[command(group(ArgGroup::new("detector_kind").required(true).args(["predictions", "detector", "method"])))]
 pub struct EvaluateArgs {
     /// A set written by `geltip dataset` (its sensor, labels and images).
@@ -22,7 +22,13 @@ pub struct EvaluateArgs {
     /// (the stability sweep, with noise, hidden contacts, empty frames and pairs).
     #[arg(long, value_parser = SUITES, requires = "sensor")]
     suite: Option<String>,
-    /// The sensor a suite is rendered for: a preset or a TOML file.
+    /// A real sensor's labelled frames: a set file (JSON lines: image, reference, contact and
+    /// any of pixel, azimuth_deg + centre, point_mm, region, group) or the AllSight set's
+    /// labels.json, scored with the metrics each label allows.
+    #[arg(long, requires = "sensor")]
+    real: Option<PathBuf>,
+    /// The sensor a suite is rendered for, or that took the real frames: a preset or a TOML
+    /// file.
     #[arg(long, conflicts_with = "dataset")]
     sensor: Option<String>,
     /// Detections written beforehand: JSON lines {"sample": k, "detections": [{"pixel":
@@ -37,6 +43,10 @@ pub struct EvaluateArgs {
     /// A built-in localiser: surface, paper or change.
     #[arg(long)]
     method: Option<String>,
+    /// The change method's decision threshold, in noise spreads (default 20): lower finds
+    /// fainter contacts and calls more drift a contact.
+    #[arg(long, requires = "method")]
+    threshold: Option<f64>,
     /// Directory for summary.json, per_sample.jsonl, tables.md and the charts.
     #[arg(long)]
     out: PathBuf,
@@ -47,7 +57,7 @@ pub struct EvaluateArgs {
     #[arg(long, default_value_t = 60.0)]
     timeout_s: f64,
     /// Another run's output directory, to set the two detectors side by side.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "real")]
     compare: Option<PathBuf>,
     /// What the report calls the detector (default: the file, the command or the method).
     #[arg(long)]
@@ -63,23 +73,15 @@ pub fn evaluate(args: EvaluateArgs) -> Result<()> {
         );
     }
     let sensor = args.sensor.as_deref().map(Sensor::load).transpose()?;
+    if let (Some(set), Some(sensor)) = (&args.real, &sensor) {
+        return real(&args, set, sensor);
+    }
     let source = evaluate::source(
         args.dataset.as_deref(),
         args.suite.as_deref(),
         sensor.as_ref(),
     )?;
-    let detector: Box<dyn Detector> = match (&args.predictions, &args.detector, &args.method) {
-        (Some(path), _, _) => Box::new(Predictions::read(path, source.sensor())?),
-        (_, Some(command), _) => Box::new(CommandDetector::start(
-            command,
-            Duration::from_secs_f64(args.timeout_s),
-        )?),
-        (_, _, Some(method)) => Box::new(MethodDetector::new(
-            Method::from_name(method).map_err(|e| anyhow::anyhow!("--{e}"))?,
-        )),
-        _ => bail!("name a detector: --predictions, --detector or --method"),
-    };
-    let mut detector = Named::new(detector, args.name);
+    let mut detector = Named::new(detector(&args, source.sensor())?, args.name.clone());
     let bar = progress::bar_or_lines("frames")?;
     let outcome = evaluate::run(
         &source,
@@ -94,6 +96,45 @@ pub fn evaluate(args: EvaluateArgs) -> Result<()> {
     )?;
     bar.finish_and_clear();
     println!("{}", outcome.tables);
+    println!("Wrote {}: {}", args.out.display(), outcome.files.join(", "));
+    Ok(())
+}
+
+/// The detector the arguments name, for frames of `sensor`.
+fn detector(args: &EvaluateArgs, sensor: &Sensor) -> Result<Box<dyn Detector>> {
+    Ok(match (&args.predictions, &args.detector, &args.method) {
+        (Some(path), _, _) => Box::new(Predictions::read(path, sensor)?),
+        (_, Some(command), _) => Box::new(CommandDetector::start(
+            command,
+            Duration::from_secs_f64(args.timeout_s),
+        )?),
+        (_, _, Some(method)) => Box::new(
+            MethodDetector::with_threshold(
+                Method::from_name(method).map_err(|e| anyhow::anyhow!("--{e}"))?,
+                args.threshold,
+            )
+            .map_err(|e| anyhow::anyhow!("--{e}"))?,
+        ),
+        _ => bail!("name a detector: --predictions, --detector or --method"),
+    })
+}
+
+/// `--real`: the detector scored on a real sensor's labelled frames.
+fn real(args: &EvaluateArgs, set: &std::path::Path, sensor: &Sensor) -> Result<()> {
+    let mut detector = Named::new(detector(args, sensor)?, args.name.clone());
+    let bar = progress::bar_or_lines("frames")?;
+    let outcome = evaluate::run_real(
+        set,
+        sensor,
+        &mut detector,
+        Some(&args.out),
+        |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    )?;
+    bar.finish_and_clear();
+    println!("{}", outcome.report.tables());
     println!("Wrote {}: {}", args.out.display(), outcome.files.join(", "));
     Ok(())
 }

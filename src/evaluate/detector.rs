@@ -19,6 +19,8 @@ use std::time::{Duration, Instant};
 /// built once per sensor.
 pub struct MethodDetector {
     method: Method,
+    /// The change method's decision threshold, when not its default.
+    threshold: Option<f64>,
     localisers: Vec<Localiser>,
 }
 
@@ -26,8 +28,19 @@ impl MethodDetector {
     pub fn new(method: Method) -> MethodDetector {
         MethodDetector {
             method,
+            threshold: None,
             localisers: Vec::new(),
         }
+    }
+
+    /// The method with the change method's decision `threshold` (in noise spreads); refused
+    /// for another method, or unless finite and > 0.
+    pub fn with_threshold(method: Method, threshold: Option<f64>) -> Result<MethodDetector> {
+        crate::localise::change_config(method, threshold)?;
+        Ok(MethodDetector {
+            threshold,
+            ..MethodDetector::new(method)
+        })
     }
 
     /// The localiser of `sensor` (a suite's parts may differ in noise, not in geometry, but
@@ -50,7 +63,10 @@ impl MethodDetector {
 
 impl Detector for MethodDetector {
     fn name(&self) -> String {
-        self.method.name().to_string()
+        match self.threshold {
+            Some(t) => format!("{} (threshold {t})", self.method.name()),
+            None => self.method.name().to_string(),
+        }
     }
 
     fn detect(&mut self, sample: &Sample) -> Result<Vec<Found>> {
@@ -58,7 +74,10 @@ impl Detector for MethodDetector {
         let sensor = sample.sensor.clone();
         let reference = sample.reference.rgb(&sensor)?;
         let image = sample.image.rgb(&sensor)?;
-        let d = self.localiser(&sensor).localise(reference, image, method)?;
+        let threshold = self.threshold;
+        let d = self
+            .localiser(&sensor)
+            .localise_with(reference, image, method, threshold)?;
         Ok(Found::from_detection(&d))
     }
 }

@@ -10,12 +10,15 @@
 //!   predictions file written beforehand ([`Predictions`]), or a Python function.
 //! - `geltip experiment` and `geltip stability` score their detectors through [`evaluate`]
 //!   too: one scoring code for every table geltip prints.
+//! - Frames from a real sensor, whose labels say only part of a contact's place (or that
+//!   there is none), are scored by [`real`] with the metrics each kind of label allows.
 
 pub mod charts;
 pub mod detections;
 pub mod detector;
 pub mod matching;
 pub mod metrics;
+pub mod real;
 pub mod report;
 pub mod source;
 pub mod truth;
@@ -24,6 +27,7 @@ pub use detections::{parse_line, Found};
 pub use detector::{CommandDetector, MethodDetector, Named, Predictions};
 pub use matching::{score_sample, Match, SampleScore};
 pub use metrics::{ErrorStats, Group, Scored, Summary};
+pub use real::{evaluate_real, RealFrame, RealLabel, RealReport, RealSet};
 pub use source::{DatasetSource, Source, Suite, SuiteJob, SuitePart};
 pub use truth::{region_of, LabelledContact, SampleTruth, Target, REGIONS};
 

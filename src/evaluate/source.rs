@@ -88,7 +88,7 @@ impl Source {
 }
 
 /// Writes `sensor` as a TOML file `name` in `dir`, for detectors in other processes.
-fn write_sensor(dir: &Path, name: &str, sensor: &Sensor) -> Result<Arc<PathBuf>> {
+pub(crate) fn write_sensor(dir: &Path, name: &str, sensor: &Sensor) -> Result<Arc<PathBuf>> {
     let text = toml::to_string(&sensor.config)
         .map_err(|e| GeltipError::input(format!("sensor '{}'", sensor.name), e.to_string()))?;
     let path = dir.join(name);

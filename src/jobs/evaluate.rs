@@ -1,6 +1,7 @@
 //! `geltip evaluate`: a detector scored on a set from `geltip dataset` or on a suite rendered
 //! on the fly (the paper's experiment, the stability sweep), with one protocol
-//! ([`crate::evaluate`]); the report goes to a directory.
+//! ([`crate::evaluate`]), or on a real sensor's labelled frames ([`run_real`]); the report
+//! goes to a directory.
 
 use crate::error::{GeltipError, Result};
 use crate::evaluate::{
@@ -144,4 +145,39 @@ pub fn run(
         tables,
         files,
     })
+}
+
+/// What [`run_real`] gives back: the report and the files written.
+#[derive(Debug)]
+pub struct RealOutcome {
+    pub report: evaluate::RealReport,
+    pub files: Vec<String>,
+}
+
+/// Scores `detector` on the real labelled frames of `set` (a set file, or the AllSight
+/// set's `labels.json`) taken with `sensor`, and with `out` writes the report there.
+/// `progress(done, total)` follows the frames. Nothing is written unless every frame scored.
+pub fn run_real(
+    set: &Path,
+    sensor: &Sensor,
+    detector: &mut dyn Detector,
+    out: Option<&Path>,
+    progress: impl FnMut(usize, usize),
+) -> Result<RealOutcome> {
+    let frames = evaluate::RealSet::read(set)?;
+    let work = match detector.needs() {
+        evaluate::Needs::Files => Some(WorkDir::new()?),
+        _ => None,
+    };
+    let sensor_file = work
+        .as_ref()
+        .map(|w| evaluate::source::write_sensor(&w.0, "sensor.toml", sensor))
+        .transpose()?;
+    let sensor = std::sync::Arc::new(sensor.clone());
+    let report = evaluate::evaluate_real(&frames, &sensor, sensor_file, detector, progress)?;
+    let files = match out {
+        Some(dir) => report.write(&frames, dir)?,
+        None => Vec::new(),
+    };
+    Ok(RealOutcome { report, files })
 }

@@ -297,16 +297,9 @@ impl Localiser {
         method: Method,
         threshold: Option<f64>,
     ) -> Result<Detection> {
-        match threshold {
+        match change_config(method, threshold)? {
             None => self.localise(reference, frame, method),
-            Some(_) if method != Method::Change => Err(GeltipError::option(
-                "threshold",
-                format!("applies to method 'change', not '{method}'"),
-            )),
-            Some(t) => {
-                let config = change::ChangeConfig::with_threshold(t)?;
-                self.localise_change(reference, frame, &config)
-            }
+            Some(config) => self.localise_change(reference, frame, &config),
         }
     }
 
@@ -345,4 +338,21 @@ pub fn localise(
 ) -> Result<Detection> {
     check_sizes(reference, frame, Some(sensor))?;
     Localiser::new(sensor).localise(reference, frame, method)
+}
+
+/// The change method's constants for a decision `threshold` given with `method` (none
+/// without one); a threshold for another method, or one not finite and > 0, is an error
+/// naming the option.
+pub fn change_config(
+    method: Method,
+    threshold: Option<f64>,
+) -> Result<Option<change::ChangeConfig>> {
+    match threshold {
+        None => Ok(None),
+        Some(_) if method != Method::Change => Err(GeltipError::option(
+            "threshold",
+            format!("applies to method 'change', not '{method}'"),
+        )),
+        Some(t) => change::ChangeConfig::with_threshold(t).map(Some),
+    }
 }
