@@ -162,7 +162,7 @@ fn evaluate_real_from_the_command_line() {
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     let all = summary["rows"].as_array().unwrap().last().unwrap().clone();
     assert_eq!(all["false_contacts"], 0, "{summary}");
-    for name in ["per_frame.jsonl", "set.jsonl", "tables.md"] {
+    for name in ["per_frame.jsonl", "set.jsonl", "tables.md", "by_group.svg"] {
         assert!(out.join(name).is_file(), "{name}");
     }
     let (code, _, stderr) = run(&["--method", "change", "--threshold", "0.5"]);

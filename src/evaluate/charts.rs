@@ -293,3 +293,60 @@ pub fn precision_recall(summaries: &[Value]) -> Result<String> {
         Ok(())
     })
 }
+
+/// A real set's groups as bars: per group, the share of contact frames found, of those
+/// labelled with an azimuth found at it, and of the no-contact frames called contacts (a
+/// group without such frames has no bar of that kind).
+pub fn real_by_group(report: &super::RealReport) -> Result<String> {
+    let rows = &report.rows;
+    let n = rows.len().max(1);
+    let label = |x: &f64| {
+        let i = x.round();
+        match rows.get(i as usize) {
+            Some(r) if (x - i).abs() < 1e-6 && i >= 0.0 => r.group.clone(),
+            _ => String::new(),
+        }
+    };
+    fn share(a: usize, n: usize) -> Option<f64> {
+        (n > 0).then(|| 100.0 * a as f64 / n as f64)
+    }
+    type Share = fn(&super::real::RealRow) -> Option<f64>;
+    let kinds: [(&str, Share); 3] = [
+        ("contacts found", |r| share(r.found, r.contacts)),
+        ("at the labelled azimuth", |r| {
+            share(r.at_azimuth, r.with_azimuth)
+        }),
+        ("no-contact frames called contacts", |r| {
+            share(r.false_contacts, r.empty)
+        }),
+    ];
+    let width = (160 + 70 * n as u32).max(700);
+    plot::svg("real frames by group", (width, 440), |root| {
+        let caption = format!("{} on real frames, by group", report.detector);
+        let mut chart = group_chart(root, caption, (n, &label), (125.0, "frames (%)"), "group")?;
+        for (k, (name, value)) in kinds.iter().enumerate() {
+            let c = plot::colour(k);
+            let dx = (k as f64 - 1.0) * 0.27;
+            let bars: Vec<Rectangle<(f64, f64)>> = rows
+                .iter()
+                .enumerate()
+                .filter_map(|(i, r)| {
+                    let v = value(r)?;
+                    let x = i as f64 + dx;
+                    Some(Rectangle::new([(x - 0.12, 0.0), (x + 0.12, v)], c.filled()))
+                })
+                .collect();
+            chart
+                .draw_series(bars)?
+                .label(*name)
+                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], c.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.9))
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()?;
+        Ok(())
+    })
+}

@@ -539,8 +539,9 @@ impl RealReport {
     }
 
     /// Writes `summary.json` (the rows), `per_frame.jsonl` (each frame's label and score),
-    /// `set.jsonl` (the set as scored, in the set format) and `tables.md` into `out`; the
-    /// files written.
+    /// `set.jsonl` (the set as scored, in the set format), `tables.md` and `by_group.svg`
+    /// (the groups' shares found, at the azimuth and falsely called contacts) into `out`;
+    /// the files written.
     pub fn write(&self, set: &RealSet, out: &Path) -> Result<Vec<String>> {
         std::fs::create_dir_all(out).map_err(|e| GeltipError::io(out, e))?;
         let summary = self.summary();
@@ -572,6 +573,7 @@ impl RealReport {
             ("per_frame.jsonl", per_frame),
             ("set.jsonl", set.to_jsonl(out)),
             ("tables.md", self.tables()),
+            ("by_group.svg", super::charts::real_by_group(self)?),
         ];
         for (name, text) in &files {
             crate::output::write_atomic(out.join(name), text.as_bytes())?;
