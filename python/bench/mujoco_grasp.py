@@ -9,7 +9,7 @@ above the other (two contacts on the finger's side). MuJoCo steps `--every` step
 each) per tactile frame. Two paths:
 
 - batched: `Finger.scene(data)` after each frame's steps, `Finger.render_many` on every
-  `geltip.MAX_BATCH` scenes into a reused array (what `geltip.mujoco.record` does);
+  `Simulator.batch_frames` scenes into a reused array (what `geltip.mujoco.record` does);
 - single: `Finger.render(data)` every frame.
 
 Columns: frames/s over the whole loop (stepping, scenes, rendering, labels), and per frame
@@ -81,7 +81,7 @@ def run(sim, balls, frames, every, batched):
     finger = Finger(m, body="geltip", simulator=sim)
     timed = Timed(sim)
     finger.simulator = timed
-    out = np.empty((geltip.MAX_BATCH, *sim.sensor.image_shape), np.uint8)
+    out = np.empty((sim.batch_frames, *sim.sensor.image_shape), np.uint8)
     t_step = t_scene = t_render_many = 0.0
     pending, contacts = [], 0
     start = time.perf_counter()
@@ -94,7 +94,7 @@ def run(sim, balls, frames, every, batched):
         if batched:
             pending.append(finger.scene(d))
             c = time.perf_counter()
-            if len(pending) == geltip.MAX_BATCH:
+            if len(pending) == sim.batch_frames:
                 _, labels = finger.render_many(pending, out=out)
                 contacts += sum(len(l["contacts"]) for l in labels)
                 pending = []
@@ -140,7 +140,7 @@ def main():
     rows = []
     for grasp, balls in BALLS.items():
         for path, batched in (("batched", True), ("single", False)):
-            run(sim, balls, 2 * geltip.MAX_BATCH, args.every, batched)  # warm-up
+            run(sim, balls, 2 * sim.batch_frames, args.every, batched)  # warm-up
             runs = [run(sim, balls, args.frames, args.every, batched) for _ in range(args.repeat)]
             med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
             rows.append((grasp, path, med, [r["fps"] for r in runs]))

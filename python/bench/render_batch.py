@@ -6,7 +6,7 @@
 The contacts are the Rust bench's (`cargo bench --bench render`): the paper's 56 taps
 (seven solids x rotations 0, 30, 45, 60 deg and translations 0, 5, 10, 15 mm, 1 mm deep at
 azimuth 0) over and over, `--frames` of them per pass, rendered in batches of
-`geltip.MAX_BATCH`. The machine is shared and noisy, so the two are timed pass by pass,
+`Simulator.batch_frames`. The machine is shared and noisy, so the two are timed pass by pass,
 alternating (the order rotates each time): Rust is `examples/render_batch_fps.rs`, the bench's
 'batches of 8 contacts' loop in a process kept running beside this one; Python is
 
@@ -83,8 +83,8 @@ class RustPasses:
 
 def streaming_pass(sim, todo, out, depth_out):
     start = time.perf_counter()
-    for i in range(0, len(todo), geltip.MAX_BATCH):
-        chunk = todo[i : i + geltip.MAX_BATCH]
+    for i in range(0, len(todo), sim.batch_frames):
+        chunk = todo[i : i + sim.batch_frames]
         k = len(chunk)
         sim.render_batch(chunk, out=out[:k], depth_out=depth_out[:k])
     return len(todo) / (time.perf_counter() - start)
@@ -113,8 +113,8 @@ def main():
     sim = geltip.Simulator("paper")
     todo = contacts(args.frames)
     h, w, _ = sim.sensor.image_shape
-    out = np.empty((geltip.MAX_BATCH, h, w, 3), np.uint8)
-    depth_out = np.empty((geltip.MAX_BATCH, h, w), np.float32)
+    out = np.empty((sim.batch_frames, h, w, 3), np.uint8)
+    depth_out = np.empty((sim.batch_frames, h, w), np.float32)
     # Warm-up of both.
     rust.fps()
     streaming_pass(sim, todo, out, depth_out)

@@ -24,7 +24,7 @@ def main():
     print(f"host: {sims[1].host}")
     batch = contacts(args.frames)
     for sim in sims.values():
-        sim.render_batch(batch[:3 * geltip.MAX_BATCH])  # every stream's pipelines built
+        sim.render_batch(batch[:3 * sim.batch_frames])  # every stream's pipelines built
     for r in range(args.rounds):
         print(f"round {r + 1}: host loop {geltip.host_speed()['all_cores_ms']:.1f} ms on all cores")
         for n, sim in sims.items():

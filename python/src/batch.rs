@@ -12,6 +12,7 @@ use geltip::scene::ContactSpec;
 use numpy::{Ix3, Ix4, PyArray, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
+use rayon::prelude::*;
 
 /// The arrays a batch is written into: images (N, H, W, 3) uint8 and, unless left out, depth
 /// maps (N, H, W) float32; the caller's (`out=`, `depth_out=`) or new ones.
@@ -116,15 +117,6 @@ impl<'py> Outputs<'py> {
     }
 }
 
-/// Copies `frame` into slot `k` of `images` (RGB) and of `depths`.
-pub fn copy_frame(frame: &Frame, k: usize, images: &mut [u8], depths: Option<&mut [f32]>) {
-    let (rgb, px) = (frame.rgba.len() / 4 * 3, frame.indentation.len());
-    rgba_to_rgb(&frame.rgba, &mut images[k * rgb..(k + 1) * rgb]);
-    if let Some(d) = depths {
-        d[k * px..(k + 1) * px].copy_from_slice(&frame.indentation);
-    }
-}
-
 /// Renders `specs` into `outputs`: `(images, [labels], depth maps or None)`.
 pub fn render<'py>(
     py: Python<'py>,
@@ -170,11 +162,16 @@ pub fn render_into<J: Sync, T: Send>(
     let done = pool.map(
         submissions,
         |r: &mut Renderer, (((c, jobs), image), mut depth)| {
-            let frames = work(r, c * batch, jobs)?;
-            let mut out = Vec::with_capacity(frames.len());
-            for (k, (frame, t)) in frames.into_iter().enumerate() {
-                copy_frame(&frame, k, image, depth.as_deref_mut());
-                out.push(t);
+            let (frames, out): (Vec<Frame>, Vec<T>) = work(r, c * batch, jobs)?.into_iter().unzip();
+            // Side by side: a frame's copy into the arrays is as long as its render on a GPU.
+            image
+                .par_chunks_mut(frame_rgb)
+                .zip(&frames)
+                .for_each(|(dst, f)| rgba_to_rgb(&f.rgba, dst));
+            if let Some(d) = depth.as_deref_mut() {
+                d.par_chunks_mut(frame_px)
+                    .zip(&frames)
+                    .for_each(|(dst, f)| dst.copy_from_slice(&f.indentation));
             }
             Ok(out)
         },
