@@ -7,6 +7,7 @@ use super::{Detector, Needs, Sample};
 use crate::error::{GeltipError, Result};
 use crate::localise::{Localiser, Method};
 use crate::sensor::Sensor;
+use rayon::prelude::*;
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
@@ -43,6 +44,20 @@ impl MethodDetector {
         })
     }
 
+    /// The frame's detections, with its sensor's localiser already made ([`Self::localiser`]).
+    fn detect_with(&self, sample: &Sample) -> Result<Vec<Found>> {
+        let sensor = &sample.sensor;
+        let localiser = self
+            .localisers
+            .iter()
+            .find(|l| l.sensor.config == sensor.config)
+            .ok_or_else(|| GeltipError::input("evaluate", "no localiser for the frame's sensor"))?;
+        let reference = sample.reference.rgb(sensor)?;
+        let image = sample.image.rgb(sensor)?;
+        let d = localiser.localise_with(reference, image, self.method, self.threshold)?;
+        Ok(Found::from_detection(&d))
+    }
+
     /// The localiser of `sensor` (a suite's parts may differ in noise, not in geometry, but
     /// a localiser is kept per sensor all the same).
     fn localiser(&mut self, sensor: &Sensor) -> &Localiser {
@@ -70,15 +85,17 @@ impl Detector for MethodDetector {
     }
 
     fn detect(&mut self, sample: &Sample) -> Result<Vec<Found>> {
-        let method = self.method;
-        let sensor = sample.sensor.clone();
-        let reference = sample.reference.rgb(&sensor)?;
-        let image = sample.image.rgb(&sensor)?;
-        let threshold = self.threshold;
-        let d = self
-            .localiser(&sensor)
-            .localise_with(reference, image, method, threshold)?;
-        Ok(Found::from_detection(&d))
+        self.localiser(&sample.sensor);
+        self.detect_with(sample)
+    }
+
+    fn detect_all(&mut self, samples: &[Sample]) -> Vec<Result<Vec<Found>>> {
+        // Every sensor's localiser made first; then the frames side by side.
+        for sample in samples {
+            self.localiser(&sample.sensor);
+        }
+        let me = &*self;
+        samples.par_iter().map(|s| me.detect_with(s)).collect()
     }
 }
 
@@ -363,6 +380,10 @@ impl Detector for Named<'_> {
 
     fn detect(&mut self, sample: &Sample) -> Result<Vec<Found>> {
         self.inner.detect(sample)
+    }
+
+    fn detect_all(&mut self, samples: &[Sample]) -> Vec<Result<Vec<Found>>> {
+        self.inner.detect_all(samples)
     }
 
     fn start(&mut self, indices: &[u64]) -> Result<()> {

@@ -134,6 +134,13 @@ pub trait Detector: Send {
     /// The frame's detections.
     fn detect(&mut self, sample: &Sample) -> Result<Vec<Found>>;
 
+    /// The detections of several frames, in order, each frame's own result: one frame
+    /// after another unless a detector can do better (the built-in localisers run side by
+    /// side on rayon's threads).
+    fn detect_all(&mut self, samples: &[Sample]) -> Vec<Result<Vec<Found>>> {
+        samples.iter().map(|s| self.detect(s)).collect()
+    }
+
     /// Called once every frame has been scored.
     fn finish(&mut self) -> Result<()> {
         Ok(())

@@ -21,6 +21,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+/// Frames handed to a detector at once ([`Detector::detect_all`]).
+const REAL_CHUNK: usize = 32;
+
 /// A detection this near the labelled azimuth (degrees, about the label's centre) is at it.
 pub const AZIMUTH_TOLERANCE_DEG: f64 = 15.0;
 
@@ -602,30 +605,42 @@ pub fn evaluate_real(
     detector.start(&indices)?;
     let mut references: BTreeMap<&Path, Arc<Picture>> = BTreeMap::new();
     let mut scores = Vec::with_capacity(set.frames.len());
-    for (k, frame) in set.frames.iter().enumerate() {
-        let reference = references
-            .entry(frame.reference.as_path())
-            .or_insert_with(|| Arc::new(Picture::file(&frame.reference)))
-            .clone();
-        let sample = Sample {
-            truth: SampleTruth {
-                index: k as u64,
-                contacts: Vec::new(),
-            },
-            image: Picture::file(&frame.image),
-            reference,
-            sensor: sensor.clone(),
-            sensor_file: sensor_file.clone(),
-            rendered: None,
-        };
-        let found = detector.detect(&sample).map_err(|e| {
-            bad(
-                format!("frame {k} ({})", frame.image.display()),
-                e.to_string(),
-            )
-        })?;
-        scores.push(score_frame(sensor, frame, &found));
-        progress(k + 1, set.frames.len());
+    // A chunk of frames at a time (a detector may take them side by side), their pixels
+    // dropped with the chunk.
+    for (c, chunk) in set.frames.chunks(REAL_CHUNK).enumerate() {
+        let first = c * REAL_CHUNK;
+        let samples: Vec<Sample> = chunk
+            .iter()
+            .enumerate()
+            .map(|(k, frame)| {
+                let reference = references
+                    .entry(frame.reference.as_path())
+                    .or_insert_with(|| Arc::new(Picture::file(&frame.reference)))
+                    .clone();
+                Sample {
+                    truth: SampleTruth {
+                        index: (first + k) as u64,
+                        contacts: Vec::new(),
+                    },
+                    image: Picture::file(&frame.image),
+                    reference,
+                    sensor: sensor.clone(),
+                    sensor_file: sensor_file.clone(),
+                    rendered: None,
+                }
+            })
+            .collect();
+        let found = detector.detect_all(&samples);
+        for (k, (frame, found)) in chunk.iter().zip(found).enumerate() {
+            let found = found.map_err(|e| {
+                bad(
+                    format!("frame {} ({})", first + k, frame.image.display()),
+                    e.to_string(),
+                )
+            })?;
+            scores.push(score_frame(sensor, frame, &found));
+        }
+        progress(scores.len(), set.frames.len());
     }
     detector.finish()?;
     let mut groups: Vec<&str> = Vec::new();
