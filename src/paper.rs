@@ -9,7 +9,7 @@
 //! - hemisphere, x^2 + y^2 + (z - d)^2 = r^2:
 //!   (q + alpha^2) z^2 - 2 d alpha^2 z + (d^2 - r^2) alpha^2 = 0, so
 //!   z = (2 d alpha^2 + sqrt(4 d^2 alpha^4 - 4 (q + alpha^2)(d^2 - r^2) alpha^2)) / (2 (q + alpha^2)).
-//!   Printed: the discriminant's second factor is [q] instead of [q + alpha^2], and the
+//!   Printed: the discriminant's second factor is \[q\] instead of \[q + alpha^2\], and the
 //!   sign is "+-" where only "+" (the far root) lies on the hemisphere z > d.
 //!
 //! `tests/paper_formula.rs` shows where the printed form disagrees with the exact map.

@@ -262,7 +262,7 @@ pub struct Report {
 }
 
 impl Report {
-    /// The sweep's design with the largest [`Report::sweep_score`], if any.
+    /// The sweep's design with the largest [`sweep_score`], if any.
     pub fn best_sweep(&self) -> Option<&(Sensor, Preview)> {
         self.sweep
             .iter()

@@ -9,7 +9,7 @@ use std::f64::consts::PI;
 
 impl Solid {
     /// A closed, consistently outward-wound triangle mesh of the solid
-    /// ([`dims::ROUND_SEGMENTS`] segments around round solids), its vertices on the exact
+    /// ([`super::dims::ROUND_SEGMENTS`] segments around round solids), its vertices on the exact
     /// surface and numbered in first-use order ([`Mesh::compacted`]). Its highest point is at
     /// z = 0 and its top ([`Mesh::top`]) is the origin.
     pub fn mesh(&self) -> Mesh {

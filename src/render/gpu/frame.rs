@@ -1,10 +1,11 @@
-//! The one frame path: a submission of up to [`Renderer::batch_frames`] frames, each a scene of one or
-//! more contacts (a batch's frame is a scene of one). Per frame, every object's contact pass
-//! over its own pressed rect (each texel keeps the deepest press); the elastomer's passes
-//! over the union of the footprints, split into disjoint rectangles (the cost follows the
-//! footprints' area, not the number of objects); then the touched pixels of the union of
-//! their pixel rects, cast, shaded and given noise. Each contact's labels come from its own
-//! penetration field, read back with the frames in the same round trip.
+//! The one frame path: a submission of up to [`Renderer::batch_frames`] frames, each a scene
+//! of one or more contacts (a batch's frame is a scene of one). Per frame, every object's
+//! contact pass over its own pressed rect (each texel keeps the deepest press); the
+//! elastomer's passes over the union of the footprints, split into disjoint rectangles (the
+//! cost follows the footprints' area, not the number of objects); then the touched pixels of
+//! the union of their pixel rects, cast, shaded and given noise. Each contact's labels come
+//! from its own penetration field, read back with the frames. The frames of a wave
+//! ([`Renderer::lanes`] of them) are recorded stage by stage, each on its own heightfield.
 
 use super::bindings::FrameBinding;
 use super::layout::{COUNTER_HEADER_BYTES, DEEP_COUNT, OVER_PRESSED, SHALLOW_COUNT, TILE_COUNT};

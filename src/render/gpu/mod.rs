@@ -3,13 +3,15 @@
 //! see its contacts' footprints: of the footprints' pixel rectangle, the tiles whose rays'
 //! probes read a displaced texel are listed, of those the pixels whose rays the deformation
 //! reaches, and the camera casts and shades that list alone, sized on the GPU (indirect
-//! dispatch). The frames of a submission are recorded into one submission, each into its
-//! own slice of the output buffers, and read back together.
+//! dispatch). The frames of a submission ([`Renderer::batch_frames`]) are recorded in waves
+//! of [`Renderer::lanes`] frames, stage by stage, each into its own slice of the output
+//! buffers and on its own heightfield, and read back together; the next submission's frames
+//! are prepared on the CPU meanwhile.
 //!
 //! - `resources.rs` and `pipelines.rs`: everything the renderer binds and runs, made in one
 //!   place; [`bindings`]: the one table of bindings; [`layout`]: where the shaders put
 //!   things (held to `shaders/` by `tests/shaders.rs`).
-//! - `frame.rs`: the one frame path; `stages.rs`: each stage's passes; `record.rs`: passes
+//! - `frame.rs`: the one frame path; `stages.rs`: each stage's dispatches; `record.rs`: passes
 //!   and profiling; `readback.rs`: frames back to the CPU; `prepare.rs`: the CPU's share.
 //! - `reference.rs`: the empty finger; `profile.rs`, `rays.rs`, `streams.rs`: the profile
 //!   of a frame, the lens rays for tests, renderers on devices of their own.
