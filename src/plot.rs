@@ -47,6 +47,20 @@ pub fn svg(
     Ok(text)
 }
 
+/// Draws `chart`'s series labels at `position`, as every chart of geltip's shows them: a
+/// black border on a nine-tenths white ground.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.9))
+        .position(position)
+        .draw()
+}
+
 /// A colour for `t` in 0..1 on a blue (0) - green - yellow - red (1) scale, for maps where
 /// colour is a value; `t` outside 0..1 (or NaN) is clamped (NaN to 0).
 pub fn heat(t: f64) -> RGBColor {

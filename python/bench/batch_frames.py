@@ -15,15 +15,7 @@ import time
 import numpy as np
 
 import geltip
-
-SOLIDS = ["cone", "sphere", "irregular-prism", "cylinder", "edge", "tube", "slab"]
-PLACES = ["rotation=0", "rotation=30", "rotation=45", "rotation=60",
-          "translation=0", "translation=5", "translation=10", "translation=15"]
-
-
-def contacts(n):
-    taps = [dict(object=o, at=p, azimuth=0.0, depth=1.0) for o in SOLIDS for p in PLACES]
-    return [taps[k % len(taps)] for k in range(n)]
+from render_batch import contacts  # the render bench's taps, the same as Rust's
 
 
 def timed(passes, render):

@@ -146,15 +146,14 @@ pub fn evaluate<'py>(
         ));
     };
     let mut detector = Named::new(inner, name);
+    // The exception the function raised, if it stopped the run; else the run's error.
+    let reraised = |e: PyErr| raised.lock().ok().and_then(|mut r| r.take()).unwrap_or(e);
     if let Some(set) = real {
         let sensor = sensor.ok_or_else(|| bad("real", "name the sensor that took the frames"))?;
         let outcome = detached(py, "evaluating", || {
             job::run_real(&set, &sensor, &mut detector, out.as_deref(), |_, _| {})
         });
-        let outcome = match outcome {
-            Ok(o) => o,
-            Err(e) => return Err(raised.lock().ok().and_then(|mut r| r.take()).unwrap_or(e)),
-        };
+        let outcome = outcome.map_err(reraised)?;
         let report = PyDict::new(py);
         report.set_item("summary", json_to_py(py, &outcome.report.summary())?)?;
         report.set_item("tables", outcome.report.tables())?;
@@ -172,10 +171,7 @@ pub fn evaluate<'py>(
             |_, _| {},
         )
     });
-    let outcome = match outcome {
-        Ok(o) => o,
-        Err(e) => return Err(raised.lock().ok().and_then(|mut r| r.take()).unwrap_or(e)),
-    };
+    let outcome = outcome.map_err(reraised)?;
     let report = PyDict::new(py);
     report.set_item("summary", json_to_py(py, &outcome.summary)?)?;
     report.set_item("tables", outcome.tables)?;

@@ -114,12 +114,7 @@ pub fn by_group(summaries: &[Value], key: &str, order: &[String]) -> Result<Stri
                 ))
             }))?;
         }
-        recall
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
+        plot::legend(&mut recall, SeriesLabelPosition::UpperLeft)?;
         Ok(())
     })
 }
@@ -235,12 +230,7 @@ pub fn failure_map(eval: &Evaluation, sensor: &Sensor) -> Result<String> {
             }))?
             .label(format!("false positives ({})", false_positives.len()))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 10, y)], plot::REFERENCE_GREY));
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()?;
+        plot::legend(&mut chart, SeriesLabelPosition::LowerRight)?;
         Ok(())
     })
 }
@@ -284,12 +274,7 @@ pub fn precision_recall(summaries: &[Value]) -> Result<String> {
                 });
             chart.draw_series(points.iter().map(|&p| Circle::new(p, 2, c.filled())))?;
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::LowerLeft)
-            .draw()?;
+        plot::legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
         Ok(())
     })
 }
@@ -341,12 +326,7 @@ pub fn real_by_group(report: &super::RealReport) -> Result<String> {
                 .label(*name)
                 .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
+        plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         Ok(())
     })
 }

@@ -11,6 +11,7 @@
 //! session's first as a no-contact pair).
 
 use super::detections::Found;
+use super::metrics::ErrorStats;
 use super::truth::region_of;
 use super::{Detector, Needs, Picture, Sample, SampleTruth};
 use crate::error::{GeltipError, Result};
@@ -429,17 +430,9 @@ pub fn score_frame(sensor: &Sensor, frame: &RealFrame, found: &[Found]) -> RealS
     score
 }
 
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+/// The median of `v` ([`ErrorStats`]'s); `None` when empty.
+fn median(v: Vec<f64>) -> Option<f64> {
+    ErrorStats::of(v).map(|s| s.median)
 }
 
 impl RealRow {

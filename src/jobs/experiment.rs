@@ -482,12 +482,7 @@ pub fn chart_svg(report: &Report) -> Result<String> {
                     .map(|&p| Cross::new((p as f64 + dx, top * 0.02), 6, c.stroke_width(2))),
             )?;
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
+        plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         Ok(())
     })
 }

@@ -136,12 +136,7 @@ pub fn resolution_chart(rows: &[(Sensor, Preview)], title: &str) -> Result<Strin
                 c.stroke_width(2),
             )))?;
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
+        plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     })
 }
@@ -216,11 +211,7 @@ fn draw_reach(
     )))?
     .label("whole side (down to the camera)")
     .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], plot::REFERENCE_GREY));
-    a.configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.9))
-        .position(SeriesLabelPosition::LowerRight)
-        .draw()?;
+    plot::legend(&mut a, SeriesLabelPosition::LowerRight)?;
     Ok(())
 }
 
@@ -251,9 +242,6 @@ fn draw_resolution(
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
         b.draw_series(pts.iter().map(|&q| Circle::new(q, 3, c.filled())))?;
     }
-    b.configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.9))
-        .draw()?;
+    plot::legend(&mut b, SeriesLabelPosition::MiddleRight)?;
     Ok(())
 }

@@ -300,12 +300,7 @@ impl Report {
                     chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
                 }
             }
-            chart
-                .configure_series_labels()
-                .border_style(BLACK)
-                .background_style(WHITE.mix(0.9))
-                .position(SeriesLabelPosition::LowerRight)
-                .draw()?;
+            plot::legend(&mut chart, SeriesLabelPosition::LowerRight)?;
             Ok(())
         })
     }

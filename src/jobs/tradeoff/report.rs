@@ -178,12 +178,7 @@ impl Report {
                 ("sans-serif", 10),
             )))?;
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.9))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
+        plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     }
 }

@@ -14,7 +14,7 @@ use super::readback::ReadFrames;
 use super::record::{Recorder, Stage};
 use super::resources::{held_bytes, Heightfield, Map, UNIFORM_STRIDE};
 use super::stages::ContactPass;
-use super::stages::{copy_listed_args, copy_touched_args};
+use super::stages::{copy_dispatch_args, TILE_LIST_ARGS, TOUCHED_LIST_ARGS};
 use super::{Renderer, Timings};
 use crate::error::Result;
 use crate::object::Object;
@@ -471,14 +471,14 @@ impl Renderer {
         }
         refresh(rec, wave, Map::Elastomer);
         for f in wave.iter().filter(|f| seen(f)) {
-            copy_listed_args(rec.encoder(), res, f.plan.slot);
+            copy_dispatch_args(rec.encoder(), res, f.plan.slot, TILE_LIST_ARGS);
         }
         for f in wave.iter().filter(|f| seen(f)) {
             p.touched.dispatch_listed(rec, f.plan.slot, f.frame);
         }
         rec.stage_done(Stage::Select)?;
         for f in wave.iter().filter(|f| seen(f)) {
-            copy_touched_args(rec.encoder(), res, f.plan.slot);
+            copy_dispatch_args(rec.encoder(), res, f.plan.slot, TOUCHED_LIST_ARGS);
         }
         for f in wave.iter().filter(|f| seen(f)) {
             p.camera.dispatch_touched(rec, f.plan.slot, f.frame);

@@ -98,7 +98,7 @@ impl TouchedPipelines {
     }
 
     /// The touched list of the frame in `slot`, from the listed tiles: a pass sized by the
-    /// tile list, whose arguments [`copy_listed_args`] copied.
+    /// tile list, whose arguments [`copy_dispatch_args`] copied.
     pub fn dispatch_listed<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
@@ -110,25 +110,27 @@ impl TouchedPipelines {
     }
 }
 
-/// The tile list's length in frame `slot`'s counters, as its touched list's dispatch.
-pub(super) fn copy_listed_args(encoder: &mut wgpu::CommandEncoder, res: &Resources, slot: u64) {
-    encoder.copy_buffer_to_buffer(
-        &res.counters,
-        slot * res.counter_bytes + SELECT_DISPATCH as u64 * 4,
-        &res.dispatch_args,
-        slot * DISPATCH_ARGS_BYTES + dispatch_args_at(SELECT_DISPATCH),
-        Some(12),
-    );
-}
+/// The touched list's dispatch, from the tile list's length: its counter, and one
+/// dispatch's arguments.
+pub(super) const TILE_LIST_ARGS: (u32, u64) = (SELECT_DISPATCH, 12);
+/// The camera's two dispatches, from the touched list's lengths.
+pub(super) const TOUCHED_LIST_ARGS: (u32, u64) = (SHALLOW_DISPATCH, TOUCHED_ARGS_BYTES);
 
-/// The touched list's lengths in frame `slot`'s counters, as the camera's two dispatches.
-pub(super) fn copy_touched_args(encoder: &mut wgpu::CommandEncoder, res: &Resources, slot: u64) {
+/// Indirect dispatch arguments from frame `slot`'s counters, `bytes` of them from counter
+/// `first` on ([`TILE_LIST_ARGS`], [`TOUCHED_LIST_ARGS`]), into the frame's dispatch
+/// arguments at their place.
+pub(super) fn copy_dispatch_args(
+    encoder: &mut wgpu::CommandEncoder,
+    res: &Resources,
+    slot: u64,
+    (first, bytes): (u32, u64),
+) {
     encoder.copy_buffer_to_buffer(
         &res.counters,
-        slot * res.counter_bytes + SHALLOW_DISPATCH as u64 * 4,
+        slot * res.counter_bytes + first as u64 * 4,
         &res.dispatch_args,
-        slot * DISPATCH_ARGS_BYTES + dispatch_args_at(SHALLOW_DISPATCH),
-        Some(TOUCHED_ARGS_BYTES),
+        slot * DISPATCH_ARGS_BYTES + dispatch_args_at(first),
+        Some(bytes),
     );
 }
 
@@ -144,7 +146,7 @@ impl CameraPipelines {
     }
 
     /// Stage 3 of a contact frame: the passes over the touched list of the frame in `slot`,
-    /// the shallow pixels' and the deep ones', sized by it ([`copy_touched_args`]).
+    /// the shallow pixels' and the deep ones', sized by it ([`copy_dispatch_args`]).
     pub fn dispatch_touched<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
