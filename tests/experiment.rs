@@ -149,3 +149,21 @@ fn paper_experiment_end_to_end() {
     assert_eq!(std::fs::read_dir(dir.join("labels")).unwrap().count(), 56);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The default detector (`change`), made for real sensors' frames, meets the paper's goal
+/// on its rendered taps as well: every tap found, mean error at most 0.2 mm (as the
+/// surface detector).
+#[test]
+fn change_detector_meets_the_goal_on_the_papers_taps() {
+    use geltip::evaluate::MethodDetector;
+    use geltip::jobs::evaluate as job;
+    let sensor = Sensor::preset("paper").unwrap();
+    let source = job::source(None, Some("paper"), Some(&sensor)).unwrap();
+    let mut change = MethodDetector::new(Method::Change);
+    let outcome = job::run(&source, &mut change, Some(3.0), None, None, |_, _| {}).unwrap();
+    let s = &outcome.summary;
+    assert_eq!(s["detected"], 56, "{}", outcome.tables);
+    let mean = s["error_mm"]["mean"].as_f64().unwrap();
+    assert!(mean <= 0.2, "change detector mean error {mean:.3} mm");
+    assert_eq!(s["false_positives"], 0, "{}", outcome.tables);
+}

@@ -116,9 +116,9 @@ fn real_contacts_are_found_at_their_azimuth() {
     assert!(median <= 25.0, "median {median:.1} px");
 }
 
-/// `geltip localise --method change --threshold`: a drift-only pair that the default calls no
-/// contact becomes one with the threshold low enough; a threshold for another method, or one
-/// that is not a positive number, is refused on one line.
+/// `geltip localise --threshold`: a drift-only pair that the default method (`change`) calls
+/// no contact becomes one with the threshold low enough; a threshold for another method, or
+/// one that is not a positive number, is refused on one line.
 #[test]
 fn the_threshold_is_an_option() {
     let Some(dir) = allsight() else { return };
@@ -134,15 +134,15 @@ fn the_threshold_is_an_option() {
         args.push(f);
         common::geltip(&args)
     };
-    let (code, out, _) = call(&["--method", "change"]);
+    let (code, out, _) = call(&[]);
     assert_eq!(code, 0);
     assert!(out.contains("\"detected\":false"), "{out}");
-    let (code, out, _) = call(&["--method", "change", "--threshold", "5"]);
+    let (code, out, _) = call(&["--threshold", "5"]);
     assert_eq!(code, 0);
     assert!(out.contains("\"detected\":true"), "{out}");
     for (extra, says) in [
         (
-            &["--threshold", "5"][..],
+            &["--method", "surface", "--threshold", "5"][..],
             "--threshold: applies to method 'change', not 'surface'",
         ),
         (

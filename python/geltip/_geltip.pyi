@@ -179,12 +179,12 @@ def localise(
     sensor: Sensor,
     reference: _Image,
     image: _Image,
-    method: str = "surface",
+    method: str = "change",
     threshold: Optional[float] = None,
 ) -> Dict[str, Any]:
     """Finds the contact: {"detected", "pixel", "point", "region", "confidence",
-    "regions_found", "note"}, as `geltip localise` prints. method: "surface", "paper" or
-    "change" (real sensors' frames); threshold: the change method's decision threshold in
+    "regions_found", "note"}, as `geltip localise` prints. method: "change" (real and
+    rendered frames), "surface" (rendered frames) or "paper"; threshold: the change method's decision threshold in
     noise spreads (default 20), as `--threshold`."""
 
 def load_image(path: _Path) -> _Image:

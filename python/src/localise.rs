@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 /// as `geltip localise` prints. `threshold`: the change method's decision threshold (as
 /// `--threshold`).
 #[pyfunction]
-#[pyo3(signature = (sensor, reference, image, method = "surface", threshold = None))]
+#[pyo3(signature = (sensor, reference, image, method = "change", threshold = None))]
 pub fn localise<'py>(
     py: Python<'py>,
     sensor: &Bound<'py, Sensor>,

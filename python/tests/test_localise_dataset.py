@@ -63,7 +63,7 @@ def test_localise_bad_arguments(sim, sensor):
     with pytest.raises(ValueError, match="^method: unknown 'magic'"):
         geltip.localise(sensor, reference, reference, method="magic")
     with pytest.raises(ValueError, match="^threshold: applies to method 'change'"):
-        geltip.localise(sensor, reference, reference, threshold=5.0)
+        geltip.localise(sensor, reference, reference, method="surface", threshold=5.0)
     with pytest.raises(ValueError, match="^threshold: must be greater than 0"):
         geltip.localise(sensor, reference, reference, method="change", threshold=0.0)
     # A non-contiguous view is accepted.

@@ -14,11 +14,11 @@ pub struct LocaliseArgs {
     /// The no-contact image of the same sensor (PNG or JPEG).
     #[arg(long)]
     reference: PathBuf,
-    /// paper (the paper's detector), surface (geltip's: noise-relative threshold, averaging
-    /// on the finger's surface) or change (for real sensors' frames: absorbs the LEDs'
-    /// drift, sub-pixel shifts and clipped channels, and says "no contact" when nothing
-    /// stands out).
-    #[arg(long, default_value = "surface")]
+    /// change (the default, for real and rendered frames alike: absorbs the LEDs' drift,
+    /// sub-pixel shifts and clipped channels, says "no contact" when nothing stands out, and
+    /// places the contact on the finger's surface), surface (noise-relative threshold,
+    /// averaging on the finger's surface: rendered frames) or paper (the paper's detector).
+    #[arg(long, default_value = "change")]
     method: String,
     /// The change method's decision threshold: how many noise spreads the strongest change
     /// must stand out to be a contact (default 20; lower finds fainter contacts and calls

@@ -6,7 +6,12 @@
 //! the black and white levels are censored: a black reference pixel is expected to stay
 //! black). What is left, in units of the pair's own noise, smoothed, is scored against its own
 //! spread over the circle; a region whose peak passes [`ChangeConfig::score_threshold`] is a
-//! contact, at its weighted centroid.
+//! contact. [`super::Localiser::localise_change`] places it on the finger: the middle of the
+//! region's stronger part ([`ChangeConfig::outline_fraction`]) on the surface, or the surface
+//! detector's contact where that lies within [`ChangeConfig::agree_mm`] of it (on clean
+//! rendered frames the surface detector is finer; on real ones drift pulls it elsewhere and
+//! the check falls back). `pixel` is the region's weighted centroid, for callers without a
+//! sensor model.
 //!
 //! On the AllSight's real frames (400 presses, 200 drift-only pairs) its constants hold with
 //! margin when each is moved by 30%; the threshold was chosen on one session, 30% above its
@@ -43,6 +48,13 @@ pub struct ChangeConfig {
     /// Candidate regions: pixels above this many spreads, at least `min_area_px` of them.
     pub region_threshold: f64,
     pub min_area_px: usize,
+    /// The contact is placed by its region's pixels at or above this fraction of its peak
+    /// (the change map's smoothing spreads a contact's change well past its edge).
+    pub outline_fraction: f64,
+    /// The surface detector's contact is taken where it lies within this of the change's
+    /// own (mm on the finger): it places a contact more finely on a clean frame, and a
+    /// real frame's drift pulls it elsewhere.
+    pub agree_mm: f64,
     /// A region whose peak passes this many spreads is a contact.
     pub score_threshold: f64,
 }
@@ -63,6 +75,8 @@ impl Default for ChangeConfig {
             spread_floor: 0.1,
             region_threshold: 4.0,
             min_area_px: 20,
+            outline_fraction: 0.1,
+            agree_mm: 1.0,
             score_threshold: 20.0,
         }
     }
@@ -92,6 +106,9 @@ pub struct ChangeDetection {
     /// when nothing was detected.
     pub confidence: f64,
     pub regions: usize,
+    /// The strongest region's pixels that place it ([`ChangeConfig::outline_fraction`]),
+    /// as indices `y * width + x`; empty when there is none.
+    pub region: Vec<usize>,
 }
 
 /// The change between `reference` and `frame` (the same size) inside the circle of `radius`
@@ -222,16 +239,17 @@ fn decide(z: &[f64], mask: &[bool], w: usize, h: usize, config: &ChangeConfig) -
         .map(|&v| v > config.region_threshold)
         .collect();
     let regions = components_4(&above, w, h);
-    let best = regions
+    let peaks: Vec<(f64, &Vec<usize>)> = regions
         .iter()
         .filter(|r| r.len() >= config.min_area_px)
         .map(|r| {
             let peak = r.iter().map(|&i| scored[i]).fold(f64::MIN, f64::max);
             (peak, r)
         })
-        .max_by(|a, b| a.0.total_cmp(&b.0));
+        .collect();
+    let best = peaks.iter().copied().max_by(|a, b| a.0.total_cmp(&b.0));
     let overall = scored.iter().copied().fold(0.0, f64::max);
-    let (score, pixel) = match best {
+    let (score, pixel, region) = match best {
         Some((peak, region)) => {
             let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
             for &i in region {
@@ -240,9 +258,15 @@ fn decide(z: &[f64], mask: &[bool], w: usize, h: usize, config: &ChangeConfig) -
                 sy += wgt * (i / w) as f64;
                 sw += wgt;
             }
-            (peak, Some(DVec2::new(sx / sw, sy / sw)))
+            let cut = config.outline_fraction * peak;
+            let placed = region
+                .iter()
+                .copied()
+                .filter(|&i| scored[i] >= cut)
+                .collect();
+            (peak, Some(DVec2::new(sx / sw, sy / sw)), placed)
         }
-        None => (overall.min(config.region_threshold), None),
+        None => (overall.min(config.region_threshold), None, Vec::new()),
     };
     let detected = pixel.is_some() && score > config.score_threshold;
     let t = config.score_threshold;
@@ -257,6 +281,7 @@ fn decide(z: &[f64], mask: &[bool], w: usize, h: usize, config: &ChangeConfig) -
         score: if score.is_finite() { score } else { 0.0 },
         confidence,
         regions: regions.len(),
+        region,
     }
 }
 

@@ -314,6 +314,29 @@ impl Localiser {
         check_sizes(reference, frame, Some(&self.sensor))?;
         let s = &self.sensor;
         let found = change::detect(reference, frame, s.principal, s.lens.max_rho(), config);
+        // Placed on the surface as the surface method places its own contacts (a weighted
+        // centroid in the image is pulled by shading and the lens's compression), or where
+        // the surface method itself puts it when the two agree.
+        let on_surface = found
+            .detected
+            .then(|| surface::region_middle(s, self.cache(), &found.region))
+            .flatten();
+        if let Some(sp) = on_surface {
+            let fine = surface::detect(s, self.cache(), &self.surface, reference, frame)?;
+            let near = |p: DVec3| (p - sp.point).length() <= config.agree_mm;
+            let agreed = fine.detected && fine.point.is_some_and(near);
+            let point = if agreed { fine.point } else { Some(sp.point) };
+            let region = if agreed { fine.region } else { Some(sp.region) };
+            return Ok(Detection {
+                detected: true,
+                pixel: point.and_then(|p| s.project(p).ok()),
+                point,
+                region,
+                confidence: finite_unit(found.confidence),
+                regions_found: found.regions,
+                note: None,
+            });
+        }
         Ok(match found.pixel.filter(|_| found.detected) {
             Some(pixel) => Detection::at_pixel(s, pixel, found.confidence, found.regions),
             None => Detection::none(

@@ -270,6 +270,28 @@ fn detect_with(
     })
 }
 
+/// Where a region of pixels (indices into the image, found by any detector) lies on the
+/// finger: the middle of its extent on the surface, as this detector places its own
+/// contacts (step 4). `None` when none of its pixels sees the finger.
+pub fn region_middle(
+    sensor: &Sensor,
+    cache: &SurfaceCache,
+    region: &[usize],
+) -> Option<SurfacePoint> {
+    let seen: Vec<usize> = region
+        .iter()
+        .copied()
+        .filter(|&i| cache.areas.get(i).is_some_and(|&a| a > 0.0))
+        .collect();
+    let area: f64 = seen.iter().map(|&i| cache.areas[i]).sum();
+    let sum: DVec3 = seen.iter().map(|&i| cache.points[i] * cache.areas[i]).sum();
+    if seen.is_empty() || area <= 0.0 || !sum.is_finite() {
+        return None;
+    }
+    let sp = outline_middle(&sensor.finger, cache, sum / area, &seen);
+    sp.point.is_finite().then_some(sp)
+}
+
 /// Refuses a cache built for another image size than `frame`'s.
 fn check_cache(cache: &SurfaceCache, frame: &RgbImage) -> Result<()> {
     if cache.areas.len() != frame.as_raw().len() / 3 {
