@@ -1,0 +1,394 @@
+"""A contact detector trained on geltip's synthetic frames only, scored on a real sensor's.
+
+    python python/examples/train_detector.py                      # the full run (~30 min, 2 cores)
+    python python/examples/train_detector.py --quick --out runs/q  # a smoke run (~2 min)
+
+The sim-to-real check: `geltip dataset` renders contacts on the calibrated `allsight`
+sensor; each render's change from the empty finger is put on a real no-contact frame (the
+t = 0 frames of the real set, one chosen per sample from its index), through JPEG, with
+drift between frame and reference like a real sensor's (a sector of LEDs brightening, a
+sub-pixel shift and a tiny turn, gain and offset, noise). A small CNN learns contact / no
+contact and the contact's pixel from (frame, reference, difference). No real contact frame
+is used for training. The real frames are then scored by `geltip.evaluate` (the same
+protocol as `geltip evaluate --real`), and the predictions are written so that
+
+    geltip evaluate --real ../shared/real/allsight/labels.json --sensor allsight \\
+        --predictions runs/sim2real/predictions.jsonl --out runs/sim2real/eval-cli
+
+scores them again from the file. Needs PyTorch and Pillow (`pip install torch pillow`);
+uses a GPU when PyTorch sees one. Writes into --out: the rendered set (synthetic/), the
+model (model.pt), training.json (losses, times), predictions.jsonl and the report (eval/).
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+import zlib
+from io import BytesIO
+from multiprocessing import Pool
+from pathlib import Path
+
+import numpy as np
+
+import geltip
+
+try:
+    import torch
+    import torch.nn as nn
+    import torch.nn.functional as F
+    from PIL import Image
+except ImportError as e:  # pragma: no cover - depends on the environment
+    sys.exit(f"error: this example needs PyTorch and Pillow ({e}); pip install torch pillow")
+
+SCALE = 4  # the network sees the frames 4x smaller (480 -> 120 for the AllSight)
+HEAT_STRIDE = 4  # one heatmap cell per 4 input pixels (16 frame pixels)
+
+
+def geltip_binary(given):
+    """The `geltip` command: --geltip, on PATH, or this checkout's release build."""
+    if given:
+        return given
+    found = shutil.which("geltip")
+    if found:
+        return found
+    here = Path(__file__).resolve().parents[2] / "target" / "release" / "geltip"
+    if here.is_file():
+        return str(here)
+    sys.exit("error: no `geltip` command: put it on PATH, pass --geltip, or cargo build --release")
+
+
+def shrink(rgb):
+    """(H, W, 3) uint8 -> (3, H/SCALE, W/SCALE) float32 in 0..1, by block means."""
+    h, w, _ = rgb.shape
+    x = rgb[: h - h % SCALE, : w - w % SCALE].astype(np.float32)
+    x = x.reshape(h // SCALE, SCALE, w // SCALE, SCALE, 3).mean(axis=(1, 3))
+    return np.ascontiguousarray(x.transpose(2, 0, 1)) / 255.0
+
+
+def jpeg(rgb, quality):
+    """`rgb` through a JPEG encoder and back, as a camera's frames come."""
+    buf = BytesIO()
+    Image.fromarray(rgb).save(buf, format="JPEG", quality=int(quality))
+    return np.asarray(Image.open(BytesIO(buf.getvalue())).convert("RGB"))
+
+
+def sample_rng(seed, k):
+    """Sample k's own random numbers: the same whatever the order or the workers."""
+    return np.random.default_rng([seed, k])
+
+
+def background_of(k, count, seed):
+    """The background of sample k, drawn from (seed, k) alone."""
+    return zlib.crc32(f"{seed}:{k}".encode()) % count
+
+
+# Set by the pool's initializer: each worker's copy of what composing needs.
+_WORK = {}
+
+
+def _init_worker(backgrounds, reference, root, seed):
+    _WORK.update(backgrounds=backgrounds, reference=reference, root=root, seed=seed)
+
+
+def compose(job):
+    """Sample k's training frame at the network's size: its rendered change on its real
+    background (or the background alone for an empty sample), through JPEG. Returns
+    (frame, background index)."""
+    k, image, empty = job
+    w = _WORK
+    rng = sample_rng(w["seed"], k)
+    b = background_of(k, len(w["backgrounds"]), w["seed"])
+    base = w["backgrounds"][b].astype(np.float32)
+    if not empty:
+        render = geltip.load_image(str(Path(w["root"]) / image)).astype(np.float32)
+        # The imprint's strength and tint vary (its look is not yet fitted to real ones).
+        contrast = rng.uniform(0.7, 1.5) * (1 + rng.uniform(-0.3, 0.3, 3))
+        base = base + contrast * (render - w["reference"])
+    base = base + rng.normal(0.0, rng.uniform(0.5, 2.5), base.shape)
+    rgb = np.clip(np.rint(base), 0, 255).astype(np.uint8)
+    rgb = jpeg(rgb, rng.uniform(75, 97))
+    return shrink(rgb), b
+
+
+def render_set(args, out):
+    """The synthetic contacts, rendered once by `geltip dataset` (resumed if present)."""
+    root = out / "synthetic"
+    cmd = [
+        geltip_binary(args.geltip), "dataset", "--sensor", args.sensor,
+        "--count", str(args.count), "--seed", str(args.seed), "--out", str(root),
+        "--objects", args.objects,
+    ]
+    print("rendering:", " ".join(cmd), flush=True)
+    subprocess.run(cmd, check=True)
+    return root
+
+
+def real_backgrounds(real):
+    """The real set's no-contact frames (each press's t = 0 frame, the sessions' first)."""
+    names = sorted(p.name for p in real.iterdir() if p.name.endswith(("_0.jpg", "_ref_frame.jpg")))
+    if not names:
+        sys.exit(f"error: {real}: no no-contact frames (*_0.jpg, *_ref_frame.jpg)")
+    return names
+
+
+def build_training_set(args, out, real):
+    """Frames (N, 3, h, w) float16, their background index, label (pixel or none)."""
+    root = render_set(args, out)
+    ds = geltip.Dataset(root)
+    names = real_backgrounds(real)
+    backgrounds = [geltip.load_image(str(real / n)) for n in names]
+    reference = geltip.load_image(str(root / "reference.png")).astype(np.float32)
+    jobs, pixels = [], []
+    empties = int(round(args.count * args.empty_fraction))
+    for k in range(args.count):
+        labels = ds.labels[k]
+        # A set with empty samples labels scenes ({"contacts": [...]}); else one contact.
+        contacts = labels["contacts"] if "contacts" in labels else [labels]
+        contacts = [c for c in contacts if c.get("pixel") is not None]
+        if contacts:
+            jobs.append((k, labels["image"], False))
+            pixels.append(contacts[0]["pixel"])
+    # Empty samples: a background alone, indices after the rendered ones.
+    for e in range(empties):
+        jobs.append((args.count + e, None, True))
+        pixels.append(None)
+    t = time.time()
+    with Pool(args.workers, _init_worker, (backgrounds, reference, str(root), args.seed)) as pool:
+        done = pool.map(compose, jobs, chunksize=32)
+    print(f"composed {len(done)} training frames on {len(names)} real backgrounds "
+          f"in {time.time() - t:.0f} s", flush=True)
+    frames = torch.from_numpy(np.stack([d[0] for d in done]).astype(np.float16))
+    which = torch.tensor([d[1] for d in done])
+    refs = torch.from_numpy(np.stack([shrink(b) for b in backgrounds]).astype(np.float16))
+    has = torch.tensor([p is not None for p in pixels])
+    px = torch.tensor([p if p is not None else [0.0, 0.0] for p in pixels], dtype=torch.float32)
+    return frames, which, refs, has, px
+
+
+def drift(x, gen):
+    """What a real sensor's frame does against its reference with nothing pressed, on a
+    batch (B, 3, h, w): a sector of the LEDs brightens or dims, a sub-pixel shift and a
+    tiny turn, per-channel gain and offset, a smooth gradient, noise."""
+    b, _, h, w = x.shape
+    dev = x.device
+    u = lambda *s: torch.rand(*s, generator=gen, device=dev)  # noqa: E731
+    ys, xs = torch.meshgrid(
+        torch.linspace(-1, 1, h, device=dev), torch.linspace(-1, 1, w, device=dev), indexing="ij"
+    )
+    angle = torch.atan2(ys, xs)
+    # The LED sector: a channel's gain bumped around one azimuth.
+    centre = u(b, 1, 1, 1) * 2 * math.pi
+    width = 0.3 + u(b, 1, 1, 1) * 0.9
+    d = torch.remainder(angle - centre + math.pi, 2 * math.pi) - math.pi
+    bump = torch.exp(-((d / width) ** 2))
+    channel = F.one_hot((u(b) * 3).long().clamp(max=2), 3).float().view(b, 3, 1, 1)
+    mix = channel * 0.7 + 0.3 * u(b, 3, 1, 1)
+    # Real LEDs drift by up to ~58 levels over an hour (../shared/real/README.md).
+    gain = 1 + (u(b, 1, 1, 1) * 2 - 1) * 0.4 * mix * bump
+    gain = gain * (1 + (u(b, 3, 1, 1) * 2 - 1) * 0.12)
+    grad = (u(b, 3, 1, 1) * 2 - 1) * 0.03 * xs + (u(b, 3, 1, 1) * 2 - 1) * 0.03 * ys
+    offset = (u(b, 3, 1, 1) * 2 - 1) * 0.02 + grad
+    # The shift (up to 0.8 frame pixels) and the turn (up to 0.6 degrees).
+    turn = (u(b) * 2 - 1) * math.radians(0.6)
+    shift = (u(b, 2) * 2 - 1) * 0.8 / (w * SCALE / 2)
+    c, s = torch.cos(turn), torch.sin(turn)
+    theta = torch.stack(
+        [torch.stack([c, -s, shift[:, 0]], 1), torch.stack([s, c, shift[:, 1]], 1)], 1
+    )
+    grid = F.affine_grid(theta, x.shape, align_corners=False)
+    x = F.grid_sample(x, grid, mode="bilinear", padding_mode="border", align_corners=False)
+    x = x * gain + offset
+    x = x + torch.randn(x.shape, generator=gen, device=dev) * (u(b, 1, 1, 1) * 0.006)
+    return x.clamp(0, 1)
+
+
+class ContactNet(nn.Module):
+    """Contact / no contact and the contact's pixel, from (frame, reference, difference):
+    a small encoder, a heatmap at 1/4 of its input (soft-argmax gives the pixel) and a
+    presence logit from the pooled deepest features."""
+
+    def __init__(self):
+        super().__init__()
+
+        def block(i, o, stride):
+            return nn.Sequential(
+                nn.Conv2d(i, o, 3, stride, 1, bias=False), nn.BatchNorm2d(o), nn.ReLU(inplace=True)
+            )
+
+        self.stem = nn.Sequential(block(9, 24, 2), block(24, 32, 1))  # 1/2
+        self.mid = nn.Sequential(block(32, 48, 2), block(48, 64, 1))  # 1/4
+        self.deep = nn.Sequential(block(64, 96, 2), block(96, 96, 1), block(96, 96, 1))  # 1/8
+        self.heat = nn.Sequential(block(96 + 64, 48, 1), nn.Conv2d(48, 1, 1))
+        self.present = nn.Linear(2 * 96, 1)
+
+    def forward(self, frame, reference):
+        x = torch.cat([frame, reference, (frame - reference) * 4], 1)
+        mid = self.mid(self.stem(x))
+        deep = self.deep(mid)
+        up = F.interpolate(deep, size=mid.shape[-2:], mode="bilinear", align_corners=False)
+        heat = self.heat(torch.cat([up, mid], 1)).flatten(1)
+        pooled = torch.cat([deep.mean((2, 3)), deep.amax((2, 3))], 1)
+        return self.present(pooled).squeeze(1), heat, mid.shape[-2:]
+
+
+def soft_argmax(heat, shape):
+    """Each heatmap's expected frame pixel (u, v)."""
+    h, w = shape
+    p = heat.softmax(1).view(-1, h, w)
+    stride = SCALE * HEAT_STRIDE
+    us = (torch.arange(w, device=heat.device) + 0.5) * stride
+    vs = (torch.arange(h, device=heat.device) + 0.5) * stride
+    return torch.stack([(p.sum(1) * us).sum(1), (p.sum(2) * vs).sum(1)], 1)
+
+
+def heat_target(px, shape, sigma=1.0):
+    """A Gaussian around each pixel on the heatmap's grid, summing to one."""
+    h, w = shape
+    stride = SCALE * HEAT_STRIDE
+    gu = (px[:, 0] / stride - 0.5).view(-1, 1, 1)
+    gv = (px[:, 1] / stride - 0.5).view(-1, 1, 1)
+    vs = torch.arange(h, device=px.device).view(1, h, 1)
+    us = torch.arange(w, device=px.device).view(1, 1, w)
+    t = torch.exp(-((us - gu) ** 2 + (vs - gv) ** 2) / (2 * sigma**2)).flatten(1)
+    return t / t.sum(1, keepdim=True)
+
+
+def train(args, data, device):
+    frames, which, refs, has, px = data
+    n = len(frames)
+    gen = torch.Generator(device=device).manual_seed(args.seed)
+    cpu_gen = torch.Generator().manual_seed(args.seed)
+    torch.manual_seed(args.seed)
+    net = ContactNet().to(device)
+    opt = torch.optim.AdamW(net.parameters(), lr=args.lr, weight_decay=1e-4)
+    steps = args.epochs * math.ceil(n / args.batch)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, args.lr, total_steps=steps, pct_start=0.15)
+    refs_dev = refs.to(device)
+    log, step, t0 = [], 0, time.time()
+    for epoch in range(args.epochs):
+        order = torch.randperm(n, generator=cpu_gen)
+        net.train()
+        totals = np.zeros(3)
+        for at in range(0, n, args.batch):
+            idx = order[at : at + args.batch]
+            f = frames[idx].to(device).float()
+            r = refs_dev[which[idx].to(device)].float()
+            # Drift on the frame's side, and some on the reference's (both drift in life).
+            f = drift(f, gen)
+            r = torch.where(torch.rand(len(idx), 1, 1, 1, generator=gen, device=device) < 0.3,
+                            drift(r, gen), r)
+            y, p = has[idx].to(device), px[idx].to(device)
+            logit, heat, shape = net(f, r)
+            loss_p = F.binary_cross_entropy_with_logits(logit, y.float())
+            loss_h = loss_px = torch.zeros((), device=device)
+            if y.any():
+                hp = heat[y]
+                loss_h = -(heat_target(p[y], shape) * hp.log_softmax(1)).sum(1).mean()
+                loss_px = (soft_argmax(hp, shape) - p[y]).abs().mean() / 50.0
+            loss = loss_p + loss_h + loss_px
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            opt.step()
+            sched.step()
+            step += 1
+            totals += [loss_p.item(), loss_h.item(), loss_px.item() * 50]
+        batches = math.ceil(n / args.batch)
+        row = {
+            "epoch": epoch + 1,
+            "presence_bce": totals[0] / batches,
+            "heatmap_ce": totals[1] / batches,
+            "pixel_l1_px": totals[2] / batches,
+            "seconds": time.time() - t0,
+        }
+        log.append(row)
+        print(f"epoch {epoch + 1}/{args.epochs}: presence {row['presence_bce']:.3f}, "
+              f"heatmap {row['heatmap_ce']:.3f}, pixel {row['pixel_l1_px']:.1f} px, "
+              f"{row['seconds']:.0f} s", flush=True)
+    return net, log
+
+
+def detector(net, device, threshold):
+    """The trained net as a `geltip.evaluate` detector, remembering each answer."""
+    answers = []
+
+    @torch.no_grad()
+    def detect(image, reference, sensor):
+        net.eval()
+        f = torch.from_numpy(shrink(image))[None].to(device)
+        r = torch.from_numpy(shrink(reference))[None].to(device)
+        logit, heat, shape = net(f, r)
+        p = float(torch.sigmoid(logit)[0])
+        found = []
+        if p >= threshold:
+            u, v = soft_argmax(heat, shape)[0].tolist()
+            found = [{"pixel": [u, v], "confidence": p}]
+        answers.append({"sample": len(answers), "detections": found, "presence": p})
+        return found
+
+    detect.__name__ = "synthetic-cnn"
+    return detect, answers
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--real", default="../shared/real/allsight", type=Path,
+                    help="the real set's folder (labels.json and its frames)")
+    ap.add_argument("--out", default="runs/sim2real", type=Path)
+    ap.add_argument("--sensor", default="allsight", help="the sensor geltip renders")
+    ap.add_argument("--objects", default="sphere:r=2,sphere:r=3,sphere:r=4,sphere:r=5,sphere:r=7",
+                    help="what presses the finger (geltip dataset --objects; default: spheres, "
+                    "as the real set's indenter)")
+    ap.add_argument("--count", type=int, default=6000, help="rendered contact samples")
+    ap.add_argument("--empty-fraction", type=float, default=0.33,
+                    help="extra no-contact samples, as a share of --count")
+    ap.add_argument("--epochs", type=int, default=6)
+    ap.add_argument("--batch", type=int, default=64)
+    ap.add_argument("--lr", type=float, default=3e-3)
+    ap.add_argument("--threshold", type=float, default=0.5,
+                    help="presence above which a frame is called a contact")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--geltip", help="the geltip command (default: on PATH or target/release)")
+    ap.add_argument("--quick", action="store_true",
+                    help="a smoke run: 400 samples, 2 epochs")
+    args = ap.parse_args()
+    if args.quick:
+        args.count, args.epochs = min(args.count, 400), min(args.epochs, 2)
+    labels = args.real / "labels.json"
+    if not labels.is_file():
+        sys.exit(f"error: {labels}: not found (the real set; see --real)")
+    args.out.mkdir(parents=True, exist_ok=True)
+    device = "cuda" if torch.cuda.is_available() else "cpu"
+    where = torch.cuda.get_device_name(0) if device == "cuda" else f"CPU, {torch.get_num_threads()} threads"
+    print(f"training on {where}", flush=True)
+
+    t = time.time()
+    data = build_training_set(args, args.out, args.real)
+    prepared = time.time() - t
+    net, log = train(args, data, device)
+    trained = time.time() - t - prepared
+    torch.save(net.state_dict(), args.out / "model.pt")
+
+    detect, answers = detector(net, device, args.threshold)
+    t = time.time()
+    report = geltip.evaluate(detect, real=labels, sensor=args.sensor, out=args.out / "eval")
+    scored = time.time() - t
+    with open(args.out / "predictions.jsonl", "w") as f:
+        for a in answers:
+            f.write(json.dumps({"sample": a["sample"], "detections": a["detections"]}) + "\n")
+    (args.out / "training.json").write_text(json.dumps({
+        "device": where, "samples": len(data[0]), "epochs": log,
+        "prepare_s": prepared, "train_s": trained, "score_s": scored,
+        "args": {k: str(v) for k, v in vars(args).items()},
+    }, indent=1))
+    print(report.tables)
+    print(f"prepared {prepared:.0f} s, trained {trained:.0f} s on {where}, scored {scored:.0f} s; "
+          f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,52 @@
+"""python/examples/train_detector.py --quick: the sim-to-real check end to end (render,
+compose on real no-contact frames, train, score the real set), and its predictions file
+scored by `geltip evaluate --predictions` gives the same report as the run itself. Skipped
+without PyTorch or the real frames (../shared/real)."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import REPO, _find_cli
+
+REAL = REPO / ".." / "shared" / "real" / "allsight"
+
+
+def test_the_quick_run_scores_the_real_set_and_its_predictions_agree(tmp_path):
+    pytest.importorskip("torch", reason="PyTorch is not installed (pip install torch)")
+    pytest.importorskip("PIL", reason="Pillow is not installed")
+    if not (REAL / "labels.json").is_file():
+        pytest.skip(f"{REAL} is absent (real sensor frames)")
+    out = tmp_path / "run"
+    cli = _find_cli()
+    env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
+    run = subprocess.run(
+        [sys.executable, str(REPO / "python" / "examples" / "train_detector.py"), "--quick",
+         "--real", str(REAL), "--out", str(out), "--geltip", str(cli), "--workers", "2"],
+        capture_output=True, text=True, env=env,
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    training = json.loads((out / "training.json").read_text())
+    assert len(training["epochs"]) == 2 and training["samples"] > 400
+    lines = (out / "predictions.jsonl").read_text().splitlines()
+    assert [json.loads(l)["sample"] for l in lines] == list(range(600))
+    # The file, scored by the CLI, gives the run's own report.
+    again = tmp_path / "again"
+    p = subprocess.run(
+        [str(cli), "evaluate", "--real", str(REAL / "labels.json"), "--sensor", "allsight",
+         "--predictions", str(out / "predictions.jsonl"), "--out", str(again)],
+        capture_output=True, text=True,
+    )
+    assert p.returncode == 0, p.stderr
+    rows = lambda d: json.loads((d / "summary.json").read_text())["rows"]  # noqa: E731
+    assert rows(again) == rows(out / "eval")
+    # A missing real set is one line naming it.
+    bad = subprocess.run(
+        [sys.executable, str(REPO / "python" / "examples" / "train_detector.py"),
+         "--real", str(tmp_path / "nowhere"), "--out", str(out)],
+        capture_output=True, text=True, env=env,
+    )
+    assert bad.returncode != 0 and "nowhere/labels.json: not found" in bad.stderr
