@@ -76,6 +76,7 @@ pub const LIST_WORKGROUP: u32 = 64;
 /// The workgroup size of every compute entry point: `(stage, entry point, size)`. The
 /// renderer sizes its direct dispatches by these; the indirect ones are sized on the GPU.
 pub const WORKGROUP_SIZES: &[(&str, &str, [u32; 3])] = &[
+    ("start", "frame_start", [WORKGROUP, WORKGROUP, 1]),
     ("contact", "contact", [WORKGROUP, WORKGROUP, 1]),
     ("elastomer", "blend_meridian", [WORKGROUP, WORKGROUP, 1]),
     ("elastomer", "blend_azimuth", [WORKGROUP, WORKGROUP, 1]),

@@ -3,7 +3,7 @@
 //! the rect its buffers hold (the reference's pixels and zero indentation elsewhere).
 
 use super::layout::COUNTER_HEADER_BYTES;
-use super::resources::held_bytes;
+use super::resources::{held_bytes, Map};
 use super::Renderer;
 use crate::error::{GeltipError, Result};
 use crate::gpu::readback::{map_ranges, read_buffer, record_ranges, staging_bytes, unpadded_rows};
@@ -28,6 +28,8 @@ pub(super) struct ReadFrames {
     pub mapped: Instant,
     /// When the work was submitted.
     pub submitted: Instant,
+    /// The copies that read the frames back.
+    pub copies: u64,
 }
 
 impl Renderer {
@@ -57,6 +59,7 @@ impl Renderer {
         let total = staging_bytes(&self.frame_ranges(rects, fields))?;
         self.resources.reserve_staging(self.ctx, total);
         let ranges = self.frame_ranges(rects, fields);
+        let copies = ranges.iter().filter(|r| r.2 > 0).count() as u64;
         let staging = &self.resources.staging;
         record_ranges(&mut encoder, staging, &ranges)?;
         let submission = self.ctx.submit(what, encoder)?;
@@ -106,6 +109,7 @@ impl Renderer {
             fields: read_fields,
             mapped,
             submitted,
+            copies,
         })
     }
 
@@ -125,8 +129,10 @@ impl Renderer {
             ranges.push((&res.indentation, slot, bytes));
             ranges.push((&res.counters, k * res.counter_bytes, COUNTER_HEADER_BYTES));
         }
+        let height = res.heightfield.buffer(Map::Height);
+        let fields_at = res.heightfield.fields_at() * 4;
         for &(offset, bytes) in fields.iter().map(|f| f.as_ref().unwrap_or(&(0, 0))) {
-            ranges.push((&res.penetration_fields, offset, bytes));
+            ranges.push((height, fields_at + offset, bytes));
         }
         ranges
     }
