@@ -2,8 +2,9 @@
 //! and every bind group, and `shaders/shared/common.wgsl` declares the same bindings
 //! (`tests/shaders.rs` holds the table to the shader's names and kinds).
 
-use super::resources::{Map, Resources, UNIFORM_STRIDE};
+use super::resources::{held_bytes, Map, Resources, UNIFORM_STRIDE};
 use crate::render::uniforms::FrameUniform;
+use crate::render::Rect;
 
 /// What a binding holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -138,13 +139,16 @@ impl Binding {
     }
 
     fn resource<'a>(self, r: &'a Resources, f: &FrameBinding<'a>) -> wgpu::BindingResource<'a> {
-        let slice = |buffer: &'a wgpu::Buffer, bytes: u64| {
+        let w = f.wave;
+        let slice = |buffer: &'a wgpu::Buffer, offset: u64, bytes: u64| {
             wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                 buffer,
-                offset: f.first_slot * bytes,
-                size: std::num::NonZeroU64::new(f.slots * bytes),
+                offset,
+                size: std::num::NonZeroU64::new(bytes),
             })
         };
+        // At least one image row's bytes, for a wave whose frames hold no pixels.
+        let image_bytes = w.image_bytes.max(256);
         let heightfield = &r.heightfield;
         let map = |m: Map| wgpu::BindingResource::TextureView(&heightfield.map(m).view);
         match self {
@@ -158,10 +162,14 @@ impl Binding {
             Binding::ElastomerScratch => heightfield.buffer(Map::Elastomer).as_entire_binding(),
             Binding::Height => heightfield.buffer(Map::Height).as_entire_binding(),
             Binding::Probes => r.probes.as_entire_binding(),
-            Binding::Image => slice(&r.image, r.slot_bytes),
-            Binding::Indentation => slice(&r.indentation, r.slot_bytes),
+            Binding::Image => slice(&r.image, w.image_offset, image_bytes),
+            Binding::Indentation => slice(&r.indentation, w.image_offset, image_bytes),
             Binding::SdfGrid => f.grid.as_entire_binding(),
-            Binding::Counters => slice(&r.counters, r.counter_bytes),
+            Binding::Counters => slice(
+                &r.counters,
+                w.first_slot * r.counter_bytes,
+                w.slots * r.counter_bytes,
+            ),
             Binding::PenetrationMap => map(Map::Penetration),
             Binding::ElastomerMap => map(Map::Elastomer),
             Binding::HeightMap => map(Map::Height),
@@ -190,17 +198,43 @@ pub(super) const FRAMES_BOUND_BYTES: u64 = FRAMES_BOUND * UNIFORM_STRIDE;
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() as u64 <= UNIFORM_STRIDE);
 
+/// Where a wave's frames lie in the frame buffers: `slots` slots of the counters from
+/// `first_slot`, and `image_bytes` of the image and indentation buffers from
+/// `image_offset` (the frames' held rects, packed in order: [`packed_offsets`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct WaveRange {
+    pub first_slot: u64,
+    pub slots: u64,
+    pub image_offset: u64,
+    pub image_bytes: u64,
+}
+
 /// What differs between the bind groups: the frame uniforms (from `uniform_offset` of
-/// `uniform`), the slots of a submission its frames take (their slices of the image,
-/// indentation and counters buffers, `slots` of them from `first_slot`), and the SDF grid a
-/// contact pass traces (a loaded mesh's, else an empty one). Every group binds the whole
-/// heightfield, every lane's.
+/// `uniform`), the wave whose frames they are, and the SDF grid a contact pass traces (a
+/// loaded mesh's, else an empty one). Every group binds the whole heightfield, every
+/// lane's.
 pub(super) struct FrameBinding<'a> {
     pub uniform: &'a wgpu::Buffer,
     pub uniform_offset: u64,
-    pub first_slot: u64,
-    pub slots: u64,
+    pub wave: WaveRange,
     pub grid: &'a wgpu::Buffer,
+}
+
+/// Where each frame's held rect (`None`: nothing) starts in the image and indentation
+/// buffers, packed in order so that a submission's frames are read back in one copy each;
+/// and the bytes they take. (Each rect's bytes are whole 256-byte rows: every offset is
+/// aligned for a binding.)
+pub(super) fn packed_offsets(rects: &[Option<Rect>]) -> (Vec<u64>, u64) {
+    let mut at = 0;
+    let offsets = rects
+        .iter()
+        .map(|r| {
+            let offset = at;
+            at += r.map_or(0, held_bytes);
+            offset
+        })
+        .collect();
+    (offsets, at)
 }
 
 impl Resources {

@@ -15,7 +15,7 @@
 //! before every dispatch and copy that writes, and on a GPU those barriers, not the work,
 //! were a frame's time.
 
-use super::bindings::{FrameBinding, FRAMES_BOUND};
+use super::bindings::{packed_offsets, FrameBinding, WaveRange, FRAMES_BOUND};
 use super::layout::{
     groups, COUNTER_HEADER_BYTES, OVER_PRESSED, SELECT_TILES_WORKGROUP, WORKGROUP,
 };
@@ -47,8 +47,10 @@ pub(super) struct FramePlan {
     pub meridians: Vec<Rect>,
     /// The pixels that can see those texels: the span the tile list is chosen from.
     pub pixels: Option<Rect>,
-    /// The rect of the image the frame's buffers hold ([`Renderer::changed_rect`]).
+    /// The rect of the image the frame's buffers hold ([`Renderer::changed_rect`]), and
+    /// where in the image and indentation buffers ([`packed_offsets`]).
     pub holding: Option<Rect>,
+    pub image_offset: u64,
     /// Its frame uniform: the first contact's, holding its image rect, its noise seed, and
     /// as its rects the spans of the pieces. A piece's pass reads it with the piece as its
     /// rect (each stage reads only the rect it runs over: `shaders/shared/common.wgsl`).
@@ -78,8 +80,9 @@ fn over_largest(rects: impl Iterator<Item = Rect>, least: u32, frames: u32) -> G
 /// How a wave's frames start ([`Renderer::record_wave`]).
 pub(super) enum Start {
     /// A frame alone: copies and clears (on a software device these are memory copies,
-    /// where a pass would write pixel by pixel), the frame's slot and held rect.
-    Copies(u64, Option<Rect>),
+    /// where a pass would write pixel by pixel), the frame's slot, image offset and held
+    /// rect.
+    Copies(u64, u64, Option<Rect>),
     /// Several: the start pass over all of them (`shaders/start.wgsl`).
     Pass(Dispatches),
 }
@@ -111,21 +114,21 @@ pub(super) struct Wave {
 }
 
 /// A submission's frame uniforms, grouped into the bind groups its dispatches bind: per
-/// group, its first uniform, the slots of its wave, and the object whose SDF grid it binds
-/// (a contact's) or none.
+/// group, its first uniform, its wave, and the object whose SDF grid it binds (a contact's)
+/// or none.
 #[derive(Default)]
 struct Binds<'c> {
     uniforms: Vec<FrameUniform>,
-    groups: Vec<(usize, (u64, u64), Option<&'c Object>)>,
+    groups: Vec<(usize, WaveRange, Option<&'c Object>)>,
 }
 
 impl<'c> Binds<'c> {
-    /// Bind groups for a dispatch over `items` of the wave of `slots`: as many as it takes
-    /// to hold them, [`FRAMES_BOUND`] each, with how many each holds.
+    /// Bind groups for a dispatch over `items` of the wave `slots`: as many as it takes to
+    /// hold them, [`FRAMES_BOUND`] each, with how many each holds.
     fn add(
         &mut self,
         items: &[FrameUniform],
-        slots: (u64, u64),
+        slots: WaveRange,
         grid: Option<&'c Object>,
     ) -> Vec<(usize, u32)> {
         items
@@ -140,7 +143,7 @@ impl<'c> Binds<'c> {
 
     /// A dispatch each for `items` (with the rects their passes run over), sized by the
     /// largest rect.
-    fn over(&mut self, items: &[(FrameUniform, Rect)], slots: (u64, u64)) -> Dispatches {
+    fn over(&mut self, items: &[(FrameUniform, Rect)], slots: WaveRange) -> Dispatches {
         let uniforms: Vec<FrameUniform> = items.iter().map(|i| i.0).collect();
         let added = self.add(&uniforms, slots, None);
         let mut rects = items.iter().map(|i| i.1);
@@ -233,10 +236,14 @@ impl Renderer {
     fn run_frames(&mut self, scenes: &[Scene]) -> Result<(ReadFrames, (u64, u64))> {
         let contacts: Vec<&Prepared> = scenes.iter().flat_map(|(c, _)| c).collect();
         let offsets = self.field_offsets(&contacts)?;
-        let plans: Vec<FramePlan> = (0..)
+        let mut plans: Vec<FramePlan> = (0..)
             .zip(scenes)
             .map(|(slot, (contacts, seed))| self.plan(slot, contacts, *seed))
             .collect();
+        let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
+        for (p, at) in plans.iter_mut().zip(packed_offsets(&rects).0) {
+            p.image_offset = at;
+        }
         let scene_contacts: Vec<&[Prepared]> = scenes.iter().map(|(c, _)| &c[..]).collect();
         let (groups, waves) = self.waves(&plans, &scene_contacts, &offsets);
         // One wave goes into the readback's submission; several are recorded side by side
@@ -254,7 +261,6 @@ impl Renderer {
             let encoder = self.ctx.device.create_command_encoder(&Default::default());
             (encoder, commands)
         };
-        let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
         let fields: Vec<Option<(u64, u64)>> = contacts
             .iter()
             .zip(offsets)
@@ -301,6 +307,7 @@ impl Renderer {
             meridians,
             pixels,
             holding,
+            image_offset: 0,
             uniform,
         }
     }
@@ -359,12 +366,11 @@ impl Renderer {
         let groups = binds
             .groups
             .iter()
-            .map(|&(first, (first_slot, slots), object)| {
+            .map(|&(first, wave, object)| {
                 let binding = FrameBinding {
                     uniform: &res.frame_uniforms,
                     uniform_offset: first as u64 * UNIFORM_STRIDE,
-                    first_slot,
-                    slots,
+                    wave,
                     grid: object.map_or(&res.empty_grid, |o| res.grid_of(o)),
                 };
                 res.bind_group(&self.ctx.device, binding)
@@ -385,7 +391,16 @@ impl Renderer {
     ) -> Wave {
         let res = &self.resources;
         let first_slot = plans.first().map_or(0, |p| p.slot);
-        let slots = (first_slot, plans.len() as u64);
+        let image_offset = plans.first().map_or(0, |p| p.image_offset);
+        let image_end = plans
+            .last()
+            .map_or(0, |p| p.image_offset + p.holding.map_or(0, held_bytes));
+        let slots = WaveRange {
+            first_slot,
+            slots: plans.len() as u64,
+            image_offset,
+            image_bytes: image_end - image_offset,
+        };
         let seen = plans.iter().filter(|p| p.pixels.is_some()).count() as u32;
         let fields_at = res.heightfield.fields_at();
         // Each frame's uniform, with where its data lies in the wave's bindings.
@@ -395,14 +410,14 @@ impl Renderer {
                 let mut u = p.uniform;
                 let k = p.slot - first_slot;
                 u.lane = self.lane_of(p.slot) as u32;
-                u.image_at = (k * res.slot_bytes / 4) as u32;
+                u.image_at = ((p.image_offset - image_offset) / 4) as u32;
                 u.counters_at = (k * res.counter_bytes / 4) as u32;
                 u.listed_frames = seen;
                 u
             })
             .collect();
         let start = match plans {
-            [one] => Start::Copies(one.slot, one.holding),
+            [one] => Start::Copies(one.slot, one.image_offset, one.holding),
             _ => {
                 let held = plans.iter().filter_map(|p| p.holding);
                 // At least a workgroup a frame: the first clears its counters.
@@ -552,7 +567,9 @@ impl Renderer {
             hf.clear(rec.copies(Map::ALL.len() as u64), span);
         }
         match &wave.start {
-            Start::Copies(slot, holding) => self.record_frame_start(rec, *slot, *holding),
+            Start::Copies(slot, image, holding) => {
+                self.record_frame_start(rec, *slot, *image, *holding)
+            }
             Start::Pass(start) => {
                 for b in batches(start) {
                     p.start.dispatch(rec, b);
@@ -615,10 +632,15 @@ impl Renderer {
     /// A frame's start, for a frame alone: as the start pass, its image buffers hold its
     /// rect of the image, the reference's pixels there and zero indentation, and its
     /// counters are zero.
-    fn record_frame_start(&self, rec: &mut Recorder, slot: u64, holding: Option<Rect>) {
+    fn record_frame_start(
+        &self,
+        rec: &mut Recorder,
+        slot: u64,
+        offset: u64,
+        holding: Option<Rect>,
+    ) {
         let res = &self.resources;
         if let Some(r) = holding {
-            let offset = slot * res.slot_bytes;
             let encoder = rec.copies(2);
             res.copy_reference(encoder, offset, r);
             encoder.clear_buffer(&res.indentation, offset, Some(held_bytes(r)));
@@ -634,7 +656,7 @@ impl Renderer {
 fn contact_dispatches<'c>(
     binds: &mut Binds<'c>,
     round: &[(&'c Object, FrameUniform, Rect)],
-    slots: (u64, u64),
+    slots: WaveRange,
 ) -> Vec<(u32, usize, Groups)> {
     let key = |(o, u, _): &(&Object, FrameUniform, Rect)| {
         let mesh = matches!(o, Object::Mesh { .. }).then_some(*o as *const Object as usize);

@@ -1,6 +1,6 @@
 //! The lens rays on the GPU, for tests: the undeformed surface point each pixel sees.
 
-use super::bindings::FrameBinding;
+use super::bindings::{FrameBinding, WaveRange};
 use super::layout::{groups, LIST_WORKGROUP};
 use super::record::{Groups, Recorder};
 use super::resources::Map;
@@ -37,8 +37,12 @@ impl Renderer {
         let binding = FrameBinding {
             uniform: &uniform,
             uniform_offset: 0,
-            first_slot: 0,
-            slots: 1,
+            wave: WaveRange {
+                first_slot: 0,
+                slots: 1,
+                image_offset: 0,
+                image_bytes: res.slot_bytes,
+            },
             grid: &res.empty_grid,
         };
         let bind = res.bind_group(&self.ctx.device, binding);

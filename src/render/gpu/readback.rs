@@ -2,6 +2,7 @@
 //! submission costs one round trip, and each frame's image and indentation are read over
 //! the rect its buffers hold (the reference's pixels and zero indentation elsewhere).
 
+use super::bindings::packed_offsets;
 use super::layout::COUNTER_HEADER_BYTES;
 use super::resources::{held_bytes, Map};
 use super::Renderer;
@@ -76,31 +77,40 @@ impl Renderer {
                 counters: Vec::new(),
             })
             .collect();
-        let frame_ranges = 3 * rects.len();
+        let (offsets, _) = packed_offsets(rects);
         let (mapped, read_fields) = map_ranges(self.ctx, staging, &ranges, submission, |all| {
             let mapped = Instant::now();
-            let (parts, fields) = all.split_at(frame_ranges);
+            let (images, indentations, counters, all_fields) = (
+                all[0],
+                all[1],
+                &all[2..2 + rects.len()],
+                all[2 + rects.len()],
+            );
             frames
                 .par_iter_mut()
-                .zip(parts.par_chunks(3))
-                .zip(rects)
-                .for_each(|((frame, part), rect)| {
+                .zip(counters)
+                .zip(rects.par_iter().zip(&offsets))
+                .for_each(|((frame, counters), (rect, &at))| {
                     if let Some(r) = *rect {
+                        let held = at as usize..(at + held_bytes(r)) as usize;
                         let rgba = bytemuck::cast_slice_mut::<u8, [u8; 4]>(&mut frame.rgba);
-                        paste_rows(rgba, width, r, part[0], |b| b);
+                        paste_rows(rgba, width, r, &images[held.clone()], |b| b);
                         paste_rows(
                             &mut frame.indentation,
                             width,
                             r,
-                            part[1],
+                            &indentations[held],
                             f32::from_ne_bytes,
                         );
                     }
-                    frame.counters = bytemuck::pod_collect_to_vec(part[2]);
+                    frame.counters = bytemuck::pod_collect_to_vec(counters);
                 });
             let fields: Vec<Vec<f32>> = fields
                 .par_iter()
-                .map(|b| bytemuck::pod_collect_to_vec(b))
+                .map(|f| {
+                    let (at, bytes) = f.unwrap_or((0, 0));
+                    bytemuck::pod_collect_to_vec(&all_fields[at as usize..(at + bytes) as usize])
+                })
                 .collect();
             (mapped, fields)
         })?;
@@ -113,27 +123,26 @@ impl Renderer {
         })
     }
 
-    /// What [`Self::read_frames`] reads: per frame, its image's and indentation's rect and
-    /// its counters; then the fields.
+    /// What [`Self::read_frames`] reads: the frames' images and indentations (their rects,
+    /// packed in order: [`packed_offsets`]), a copy each; each frame's counters; and the
+    /// contacts' fields, packed in order in the height buffer, in one copy.
     fn frame_ranges(
         &self,
         rects: &[Option<Rect>],
         fields: &[Option<(u64, u64)>],
     ) -> Vec<(&wgpu::Buffer, u64, u64)> {
         let res = &self.resources;
-        let mut ranges = Vec::with_capacity(3 * rects.len() + fields.len());
-        for (k, rect) in (0..).zip(rects) {
-            let slot = k * res.slot_bytes;
-            let bytes = rect.map_or(0, held_bytes);
-            ranges.push((&res.image, slot, bytes));
-            ranges.push((&res.indentation, slot, bytes));
+        let (_, held) = packed_offsets(rects);
+        let mut ranges = Vec::with_capacity(3 + rects.len());
+        ranges.push((&res.image, 0, held));
+        ranges.push((&res.indentation, 0, held));
+        for k in 0..rects.len() as u64 {
             ranges.push((&res.counters, k * res.counter_bytes, COUNTER_HEADER_BYTES));
         }
         let height = res.heightfield.buffer(Map::Height);
         let fields_at = res.heightfield.fields_at() * 4;
-        for &(offset, bytes) in fields.iter().map(|f| f.as_ref().unwrap_or(&(0, 0))) {
-            ranges.push((height, fields_at + offset, bytes));
-        }
+        let end = fields.iter().flatten().map(|&(at, bytes)| at + bytes).max();
+        ranges.push((height, fields_at, end.unwrap_or(0)));
         ranges
     }
 

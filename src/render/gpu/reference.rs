@@ -1,7 +1,7 @@
 //! The empty finger: every pixel ray-cast once per renderer, which also leaves each ray's
 //! probes and each tile's texel ranges for the contact frames after it.
 
-use super::bindings::FrameBinding;
+use super::bindings::{FrameBinding, WaveRange};
 use super::record::Recorder;
 use super::resources::{extent, whole_image, Map};
 use super::{Renderer, Timings};
@@ -44,8 +44,12 @@ impl Renderer {
         let binding = FrameBinding {
             uniform: &uniform,
             uniform_offset: 0,
-            first_slot: 0,
-            slots: 1,
+            wave: WaveRange {
+                first_slot: 0,
+                slots: 1,
+                image_offset: 0,
+                image_bytes: res.slot_bytes,
+            },
             grid: &res.empty_grid,
         };
         let bind = res.bind_group(&self.ctx.device, binding);
