@@ -163,7 +163,7 @@ fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup
     // One workgroup of select_listed per tile.
     let e = atomicAdd(&counters[frame_word(TILE_COUNT)], 1u);
     grow_dispatch(SELECT_DISPATCH, e);
-    atomicStore(&counters[frame_word(TOUCHED_LIST + list_capacity() + e)], tile);
+    atomicStore(&counters[frame.list_at + list_capacity() + e], tile);
 }
 
 // Then the pixels of the listed tiles, a workgroup (PIXEL_TILE x PIXEL_TILE) a tile, within
@@ -176,7 +176,7 @@ fn select_listed(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocat
     if e >= atomicLoad(&counters[frame_word(TILE_COUNT)]) {
         return;
     }
-    let tile = atomicLoad(&counters[frame_word(TOUCHED_LIST + list_capacity() + e)]);
+    let tile = atomicLoad(&counters[frame.list_at + list_capacity() + e]);
     let x = (tile % tiles_x()) * PIXEL_TILE + local.x;
     let y = (tile / tiles_x()) * PIXEL_TILE + local.y;
     let r = frame.pixel_rect;

@@ -539,7 +539,7 @@ fn uniform_structs_equal_the_shaders() {
         member!(F, listed_frames),
         member!(F, image_size[0] as "image_w"),
         member!(F, image_size[1] as "image_h"),
-        member!(F, pad),
+        member!(F, list_at),
     ];
     let source = geltip::gpu::shaders::compose("contact").unwrap();
     let module = naga::front::wgsl::parse_str(&source).unwrap();

@@ -114,7 +114,8 @@ struct Frame {
     // The size of the rect the image buffers hold (from image_x, image_y).
     image_w: u32,
     image_h: u32,
-    pad: u32,
+    // The word of `counters` where the frame's touched list starts, its tile list after it.
+    list_at: u32,
 }
 
 // A frame uniform in its place of the frame uniforms' buffer (src/render/gpu/resources.rs
@@ -186,9 +187,10 @@ const PROBES_STRIDE: u32 = 2u;
 @group(0) @binding(7) var<storage, read_write> indentation: array<f32>;
 // A loaded mesh's SDF: x fastest, then y, then z.
 @group(0) @binding(8) var<storage, read> sdf_grid: array<f32>;
-// Each frame's counters and its touched-pixel list from frame.counters_at: words below
-// (frame_word), the list's places in shared/touched_list.wgsl. The indirect dispatches'
-// arguments are the wave's, in its first frame's words.
+// Each frame's counters from frame.counters_at (words below: frame_word; a wave's frames'
+// counters side by side) and its touched-pixel and tile lists from frame.list_at
+// (shared/touched_list.wgsl). The indirect dispatches' arguments are the wave's, in its
+// first frame's words.
 @group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
 // What the heightfield's samplers read (taps along the surface, steps along a ray): copies of
 // the three buffers above as textures, refreshed after each stage that writes them
@@ -245,8 +247,9 @@ const DEEP_DISPATCH: u32 = 8u;
 // select_listed over them (three words).
 const TILE_COUNT: u32 = 3u;
 const SELECT_DISPATCH: u32 = 12u;
-// The touched pixels' indices (y * width + x) start here; the list holds a frame's pixels.
-// The tile list follows it (tile indices, row by row on the image's grid of tiles).
+// Words of a frame's counters (the rest of a frame's words are its lists, from
+// frame.list_at: the touched pixels' indices (y * width + x), a place per pixel of the
+// image, then the tile list's tile indices, row by row on the image's grid of tiles).
 const TOUCHED_LIST: u32 = 64u;
 // Invocations per workgroup of the passes over the touched list.
 const TOUCHED_WORKGROUP: u32 = 64u;

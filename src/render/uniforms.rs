@@ -115,7 +115,9 @@ pub struct FrameUniform {
     pub listed_frames: u32,
     /// The size of the rect the image buffers hold (with `image_origin`).
     pub image_size: [u32; 2],
-    pub pad: u32,
+    /// The word of the counters binding where the frame's touched list starts, its tile
+    /// list after it (`shared/touched_list.wgsl`).
+    pub list_at: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 224);

@@ -411,7 +411,11 @@ impl Renderer {
                 let k = p.slot - first_slot;
                 u.lane = self.lane_of(p.slot) as u32;
                 u.image_at = ((p.image_offset - image_offset) / 4) as u32;
-                u.counters_at = (k * res.counter_bytes / 4) as u32;
+                // The wave's frames' counters side by side, then their lists: the counters
+                // are read back in one copy.
+                u.counters_at = (k * COUNTER_HEADER_BYTES / 4) as u32;
+                let lists = plans.len() as u64 * COUNTER_HEADER_BYTES;
+                u.list_at = ((lists + k * (res.counter_bytes - COUNTER_HEADER_BYTES)) / 4) as u32;
                 u.listed_frames = seen;
                 u
             })

@@ -27,7 +27,7 @@ wgsl_constants! {
     SHALLOW_DISPATCH = 4;
     DEEP_DISPATCH = 8;
     SELECT_DISPATCH = 12;
-    /// Word where the touched list starts (the counters before it are read back).
+    /// Words of a frame's counters (cleared and read back; its lists are elsewhere).
     TOUCHED_LIST = 64;
     /// Invocations per workgroup of the camera's passes over the touched list.
     TOUCHED_WORKGROUP = 64;
@@ -39,7 +39,7 @@ wgsl_constants! {
     PIXEL_TILE = 8;
 }
 
-/// Bytes of a frame's counters before the touched list: what is cleared and read back.
+/// Bytes of a frame's counters: what is cleared and read back.
 pub const COUNTER_HEADER_BYTES: u64 = TOUCHED_LIST as u64 * 4;
 
 /// Bytes per pixel of the rays' probes.

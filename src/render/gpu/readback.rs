@@ -80,12 +80,12 @@ impl Renderer {
         let (offsets, _) = packed_offsets(rects);
         let (mapped, read_fields) = map_ranges(self.ctx, staging, &ranges, submission, |all| {
             let mapped = Instant::now();
-            let (images, indentations, counters, all_fields) = (
-                all[0],
-                all[1],
-                &all[2..2 + rects.len()],
-                all[2 + rects.len()],
-            );
+            let waves = rects.len().div_ceil(self.lanes);
+            let (images, indentations, all_fields) = (all[0], all[1], all[2 + waves]);
+            let counters: Vec<&[u8]> = all[2..2 + waves]
+                .iter()
+                .flat_map(|w| w.chunks(COUNTER_HEADER_BYTES as usize))
+                .collect();
             frames
                 .par_iter_mut()
                 .zip(counters)
@@ -136,8 +136,11 @@ impl Renderer {
         let mut ranges = Vec::with_capacity(3 + rects.len());
         ranges.push((&res.image, 0, held));
         ranges.push((&res.indentation, 0, held));
-        for k in 0..rects.len() as u64 {
-            ranges.push((&res.counters, k * res.counter_bytes, COUNTER_HEADER_BYTES));
+        // A wave's frames' counters lie side by side from its first slot's place.
+        for first in (0..rects.len()).step_by(self.lanes) {
+            let frames = (rects.len() - first).min(self.lanes) as u64;
+            let at = first as u64 * res.counter_bytes;
+            ranges.push((&res.counters, at, frames * COUNTER_HEADER_BYTES));
         }
         let height = res.heightfield.buffer(Map::Height);
         let fields_at = res.heightfield.fields_at() * 4;
