@@ -384,17 +384,28 @@ fn gpu_rows(
         each(r, &twins, |r, pair| r.render_scene(pair))
     })?;
     row("two contacts per scene", &mut two_scene);
-    // The same scenes in batches (Renderer::render_scenes), at the largest batch.
+    // The same scenes in batches (Renderer::render_scenes), at the largest batch and lanes.
     let scenes: Vec<Vec<Press>> = twins.iter().map(|t| t.to_vec()).collect();
     let n = batches.iter().copied().max().unwrap_or(default.0);
+    let l = lane_counts
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(default.1)
+        .min(n);
     r.set_batch_frames(n)?;
+    r.set_lanes(l)?;
     let mut two_batched = passes(repeat, frames, || {
         each(r, scenes.chunks(4 * n), |r, chunk| {
             r.render_scenes(chunk, false)
         })
     })?;
-    row(&format!("two per scene, batches of {n}"), &mut two_batched);
+    row(
+        &format!("two per scene, batches of {n}, {l} lanes"),
+        &mut two_batched,
+    );
     r.set_batch_frames(default.0)?;
+    r.set_lanes(default.1)?;
     Ok(single)
 }
 

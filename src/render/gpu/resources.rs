@@ -206,7 +206,7 @@ fn check_device(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Re
         )));
     }
     let limits = ctx.device.limits();
-    if (limits.max_uniform_buffer_binding_size as u64) < FRAMES_BOUND_BYTES {
+    if limits.max_uniform_buffer_binding_size < FRAMES_BOUND_BYTES {
         return Err(GeltipError::Gpu(format!(
             "adapter {} binds {} bytes of uniforms at most; the renderer needs {FRAMES_BOUND_BYTES}",
             ctx.adapter_info.name, limits.max_uniform_buffer_binding_size
