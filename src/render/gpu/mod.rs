@@ -4,9 +4,10 @@
 //! probes read a displaced texel are listed, of those the pixels whose rays the deformation
 //! reaches, and the camera casts and shades that list alone, sized on the GPU (indirect
 //! dispatch). The frames of a submission ([`Renderer::batch_frames`]) are recorded in waves
-//! of [`Renderer::lanes`] frames, stage by stage, each into its own slice of the output
-//! buffers and on its own heightfield, and read back together; the next submission's frames
-//! are prepared on the CPU meanwhile.
+//! of [`Renderer::lanes`] frames, each stage one dispatch over the whole wave (the frame the
+//! third coordinate of its workgroups), each frame into its own slice of the output buffers
+//! and on its own heightfield, and read back together; the next submission's frames are
+//! prepared on the CPU meanwhile.
 //!
 //! - `resources.rs` and `pipelines.rs`: everything the renderer binds and runs, made in one
 //!   place; [`bindings`]: the one table of bindings; [`layout`]: where the shaders put
@@ -60,9 +61,10 @@ pub fn default_batch(adapter: &wgpu::AdapterInfo) -> usize {
 /// Frames of a submission whose stages are recorded side by side unless told otherwise
 /// ([`Renderer::set_lanes`]): one on a software device, where the frames' work runs on the
 /// same cores either way; on a GPU, where one frame's stage is too little work to fill it
-/// and each pass and copy between stages costs its own fixed time, a batch's worth, as many
-/// as [`LANES_BYTES`] of heightfields hold (a lane's heightfield of `texels` per side takes
-/// 48 bytes a texel, its buffers and maps).
+/// and each dispatch and copy costs its own fixed time (a barrier), a batch's worth, as
+/// many as [`LANES_BYTES`] of heightfields hold (a lane's heightfield of `texels` per side
+/// takes 48 bytes a texel, its buffers and maps). The renderer takes fewer where the
+/// device cannot bind that many at once.
 pub fn default_lanes(adapter: &wgpu::AdapterInfo, texels: u32) -> usize {
     let lane_bytes = 48 * texels as u64 * texels as u64;
     match adapter.device_type {

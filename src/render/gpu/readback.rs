@@ -1,6 +1,8 @@
 //! Reading frames back: the copies ride in the submission of the work they read, so a
 //! submission costs one round trip, and each frame's image and indentation are read over
-//! the rect its buffers hold (the reference's pixels and zero indentation elsewhere).
+//! the rect its buffers hold (the reference's pixels and zero indentation elsewhere). The
+//! frames' rects, a wave's counters and the contacts' fields each lie packed, so the copies
+//! are a few a submission, not a few a frame.
 
 use super::bindings::packed_offsets;
 use super::layout::COUNTER_HEADER_BYTES;
@@ -37,8 +39,8 @@ impl Renderer {
     /// Submits `encoder` (the work that renders frames `0..rects.len()` of a submission)
     /// with the copies that read them back appended, waits once and unpacks: per frame, its
     /// image and indentation (read over its rect, which its buffers hold) and its counters;
-    /// then the contacts' penetration fields over `fields` (byte ranges of the penetration
-    /// fields; an empty field for `None`).
+    /// then the contacts' penetration fields over `fields` (byte ranges among the contacts'
+    /// fields, packed in order after the lanes' heights; an empty field for `None`).
     pub(super) fn read_frames(
         &mut self,
         what: &str,

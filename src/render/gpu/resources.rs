@@ -34,13 +34,15 @@ pub(super) struct Resources {
     pub probe_map: MapTexture,
     /// Nearest, clamped: the maps' textureGather (see `shaders/shared/common.wgsl`).
     pub map_sampler: wgpu::Sampler,
-    /// Each frame of a submission's image and indentation, in slices of `slot_bytes`.
+    /// The image and indentation of each frame of a submission over the rect it holds,
+    /// packed in order ([`super::bindings::packed_offsets`]; `slot_bytes` a frame at most).
     pub image: wgpu::Buffer,
     pub indentation: wgpu::Buffer,
-    /// Each frame's counters and touched list, in slices of `counter_bytes`.
+    /// The frames' counters and lists, `counter_bytes` a frame: a wave's from its first
+    /// frame's slot on, their counters side by side and their lists after them.
     pub counters: wgpu::Buffer,
-    /// Per frame, the indirect dispatches' arguments, copied from `counters`
-    /// ([`super::layout::dispatch_args_at`]).
+    /// Per wave, at its first frame's slot, the indirect dispatches' arguments, copied from
+    /// `counters` ([`super::layout::dispatch_args_at`]).
     pub dispatch_args: wgpu::Buffer,
     /// The empty finger's image, from which a frame copies the rect it can change.
     pub reference_texture: wgpu::Texture,
