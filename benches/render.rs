@@ -9,7 +9,9 @@
 //! sensor), one contact per submission, and batches of contacts per submission; each split
 //! into CPU preparation, GPU render (record, submit and wait, the copies for reading back
 //! included; `record`: its CPU share until the submission) and readback (unpacking the
-//! mapped frames), with the pixels re-rendered per frame; two
+//! mapped frames), with the pixels re-rendered per frame and the commands recorded per frame
+//! (`disp+copy+read`: compute dispatches, copies and clears, and the copies that read the
+//! frames back; wgpu puts a barrier before each that writes); two
 //! renderers on devices of their own, one contact per submit each on its own thread (fps
 //! over both); one and two non-overlapping contacts per frame (`render_scene`); and the CPU
 //! alternative (the CPU mirrors over the same footprint, on rayon's threads). Each row is the
@@ -66,8 +68,15 @@ fn row(name: &str, passes: &mut [Pass]) {
         passes[0].fps(),
         passes[passes.len() - 1].fps()
     );
+    let count = |n: u64| n as f64 / p.frames as f64;
+    let commands = format!(
+        "{:.2}+{:.2}+{:.2}",
+        count(p.t.dispatches),
+        count(p.t.copies),
+        count(p.t.readback_copies)
+    );
     println!(
-        "| {name:<30} | {:>6} | {:>8.1} | {range:>9} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.3} | {:>8.2} | {:>8.0} | {:>7.2} |",
+        "| {name:<30} | {:>6} | {:>8.1} | {range:>9} | {:>8.2} | {:>8.2} | {:>8.2} | {:>8.3} | {:>8.2} | {:>8.0} | {:>7.2} | {commands:>16} |",
         p.frames,
         p.fps(),
         per(p.wall),
@@ -281,7 +290,7 @@ fn main() -> anyhow::Result<()> {
 
 fn print_table_header() {
     println!(
-        "| {:<30} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>7} |",
+        "| {:<30} | {:>6} | {:>8} | {:>9} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>8} | {:>7} | {:>16} |",
         "what",
         "frames",
         "fps",
@@ -292,11 +301,12 @@ fn print_table_header() {
         "record",
         "readback",
         "touched",
-        "host ms"
+        "host ms",
+        "disp+copy+read"
     );
     println!(
-        "|{:-<32}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->9}|",
-        "", "", "", "", "", "", "", "", "", "", ""
+        "|{:-<32}|{:->8}|{:->10}|{:->11}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->10}|{:->9}|{:->18}|",
+        "", "", "", "", "", "", "", "", "", "", "", ""
     );
 }
 
@@ -374,17 +384,28 @@ fn gpu_rows(
         each(r, &twins, |r, pair| r.render_scene(pair))
     })?;
     row("two contacts per scene", &mut two_scene);
-    // The same scenes in batches (Renderer::render_scenes), at the largest batch.
+    // The same scenes in batches (Renderer::render_scenes), at the largest batch and lanes.
     let scenes: Vec<Vec<Press>> = twins.iter().map(|t| t.to_vec()).collect();
     let n = batches.iter().copied().max().unwrap_or(default.0);
+    let l = lane_counts
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(default.1)
+        .min(n);
     r.set_batch_frames(n)?;
+    r.set_lanes(l)?;
     let mut two_batched = passes(repeat, frames, || {
         each(r, scenes.chunks(4 * n), |r, chunk| {
             r.render_scenes(chunk, false)
         })
     })?;
-    row(&format!("two per scene, batches of {n}"), &mut two_batched);
+    row(
+        &format!("two per scene, batches of {n}, {l} lanes"),
+        &mut two_batched,
+    );
     r.set_batch_frames(default.0)?;
+    r.set_lanes(default.1)?;
     Ok(single)
 }
 

@@ -131,7 +131,8 @@ fn march_to_skin(px: vec2<f32>, probes: Probes) -> SkinHit {
 // whose skin is the undeformed surface itself (the heightfield is zero), shaded; and the
 // ray's probes, kept for later frames' selection of touched pixels (touched.wgsl).
 @compute @workgroup_size(8, 8)
-fn camera(@builtin(global_invocation_id) id: vec3<u32>) {
+fn camera(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     if id.x >= frame.pixel_rect.z || id.y >= frame.pixel_rect.w {
         return;
     }
@@ -164,9 +165,10 @@ fn write_hit(xy: vec2<u32>, hit: SkinHit) {
 // (the LED stage's shading, shaders/shared/shading.wgsl): the hit goes straight into the
 // pixel.
 @compute @workgroup_size(64)
-fn camera_shallow(@builtin(global_invocation_id) id: vec3<u32>) {
+fn camera_shallow(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     let k = touched_index(id);
-    if k >= atomicLoad(&counters[SHALLOW_COUNT]) {
+    if k >= atomicLoad(&counters[frame_word(SHALLOW_COUNT)]) {
         return;
     }
     let xy = listed_pixel(k, false);
@@ -175,9 +177,10 @@ fn camera_shallow(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // The same for the deep pixels: marched.
 @compute @workgroup_size(64)
-fn camera_deep(@builtin(global_invocation_id) id: vec3<u32>) {
+fn camera_deep(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     let k = touched_index(id);
-    if k >= atomicLoad(&counters[DEEP_COUNT]) {
+    if k >= atomicLoad(&counters[frame_word(DEEP_COUNT)]) {
         return;
     }
     let xy = listed_pixel(k, true);

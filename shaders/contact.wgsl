@@ -82,7 +82,8 @@ fn penetration_at(u: vec2<f32>) -> f32 {
 }
 
 @compute @workgroup_size(8, 8)
-fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
+fn contact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     if id.x >= frame.pressed_rect.z || id.y >= frame.pressed_rect.w {
         return;
     }
@@ -96,9 +97,9 @@ fn contact(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     // Several objects in one frame: each contact pass keeps the deepest press (the frame
     // clears the heightfield first, so one object writes its own penetration).
-    let idx = j * sensor.texels + i;
+    let idx = texel_index(i, j);
     penetration[idx] = max(penetration[idx], p);
-    // This object's own penetration, for its labels: `height` is free until the parallels
-    // pass writes it, and the renderer copies these rows out before then.
-    height[idx] = p;
+    // This object's own penetration, for its labels, over its pressed rect's rows (texels
+    // wide) in its place after the lanes' heights, read back with the frame.
+    height[frame.field_at + (j - frame.pressed_rect.y) * sensor.texels + i] = p;
 }

@@ -14,7 +14,8 @@ fn sample_penetration(t: vec2<f32>) -> f32 {
 }
 
 @compute @workgroup_size(8, 8)
-fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
+fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     // Over the meridian rect alone: beyond the kernels' reach of every pressed texel the
     // blends are zero, as the frame's clear left them.
     if id.x >= frame.meridian_rect.z || id.y >= frame.meridian_rect.w {
@@ -46,7 +47,7 @@ fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>) {
         let x = f32(k) * sensor.wide_step_mm;
         wide += sensor.blend_weights[abs(k)].y * sample_penetration(texel_of(u + x * dir));
     }
-    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(narrow, wide, 0.0, 0.0);
+    elastomer_scratch[texel_index(i, j)] = vec4<f32>(narrow, wide, 0.0, 0.0);
 }
 
 // u turned by (cos, sin) of an angle about the disc's centre.
@@ -55,21 +56,22 @@ fn rotate(u: vec2<f32>, turn: vec2<f32>) -> vec2<f32> {
 }
 
 @compute @workgroup_size(8, 8)
-fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
+fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
         return;
     }
     let i = frame.texel_rect.x + id.x;
     let j = frame.texel_rect.y + id.y;
-    let idx = j * sensor.texels + i;
+    let idx = texel_index(i, j);
     let here = texel_centre(i, j);
     let rho = parallel_radius(length(here));
     // This texel's penetration and meridian blends from the maps, which hold their buffers'
     // values over the texel rect (copied after each stage): llvmpipe fetches a texel for all
     // lanes at once, where a storage buffer load at a per-lane index is a loop over lanes.
     let texel = vec2<u32>(i, j);
-    let pen = textureLoad(penetration_map, texel, 0).x;
-    var v = textureLoad(elastomer_map, texel, 0).xy;
+    let pen = textureLoad(penetration_map, texel, frame.lane, 0).x;
+    var v = textureLoad(elastomer_map, texel, frame.lane, 0).xy;
     if rho > 1e-6 {
         // The centre taps are this texel's own blends (v); the others walk out from it both
         // ways, a turn of the parallel at a time.
@@ -99,7 +101,7 @@ fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let t = sensor.shell_thickness;
     if pen > t {
-        atomicAdd(&counters[OVER_PRESSED], 1u);
+        atomicAdd(&counters[frame_word(OVER_PRESSED)], 1u);
     }
     let pressed = max(pen, v.x);
     var h = clamp(pressed - sensor.bulge * max(v.y - v.x, 0.0), -0.5 * t, t);
@@ -122,7 +124,8 @@ fn skin_with(u: vec2<f32>, h: f32) -> vec3<f32> {
 // buffer once the blends are done with it; the camera interpolates it, so shading is smooth
 // across texels. Mirror: src/render/elastomer.rs skin_normals.
 @compute @workgroup_size(8, 8)
-fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
+fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
         return;
     }
@@ -141,8 +144,8 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
         let texels = f32(sensor.texels);
         let fi = f32(i);
         let fj = f32(j);
-        let a = textureGather(0, height_map, map_sampler, vec2<f32>(fi, fj + 1.0) / texels);
-        let b = textureGather(0, height_map, map_sampler, vec2<f32>(fi + 1.0, fj) / texels);
+        let a = textureGather(0, height_map, map_sampler, vec2<f32>(fi, fj + 1.0) / texels, frame.lane);
+        let b = textureGather(0, height_map, map_sampler, vec2<f32>(fi + 1.0, fj) / texels, frame.lane);
         let h_left = select(0.0, a.w, fi >= 1.0);
         let h_up = select(0.0, a.y, fj + 1.0 < texels);
         let h_right = select(0.0, b.y, fi + 1.0 < texels);
@@ -160,5 +163,5 @@ fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>) {
             offset = n - n0;
         }
     }
-    elastomer_scratch[j * sensor.texels + i] = vec4<f32>(offset, 0.0);
+    elastomer_scratch[texel_index(i, j)] = vec4<f32>(offset, 0.0);
 }

@@ -28,7 +28,8 @@ fn noise_samples(i: u32, seed: u32) -> vec3<f32> {
 // Sensor noise over the whole frame (the cached reference is noise-free), on every pixel the
 // lens sees.
 @compute @workgroup_size(8, 8)
-fn add_noise(@builtin(global_invocation_id) id: vec3<u32>) {
+fn add_noise(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     if id.x >= sensor.image_size.x || id.y >= sensor.image_size.y {
         return;
     }

@@ -6,7 +6,8 @@
 // the probes buffer: it keeps the reference frame's probes.)
 
 @compute @workgroup_size(64)
-fn unproject_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
+fn unproject_pixels(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     if id.x >= frame.pixel_rect.z {
         return;
     }

@@ -29,23 +29,25 @@ fn list_if_touched(x: u32, y: u32) {
     atomicStore(&counters[listed_at(k, deep)], pixel);
 }
 
-// Takes the next place of a kind of touched pixel (its count at word `count`) and keeps the
-// dispatch over that kind (at word `dispatch`) large enough: the first pixel of each
-// workgroup's share sizes it.
+// Takes the next place of a kind of touched pixel (its count at the frame's word `count`)
+// and keeps the wave's dispatch over that kind (at word `dispatch`) large enough: the first
+// pixel of each workgroup's share sizes it.
 fn list_touched(count: u32, dispatch: u32) -> u32 {
-    let k = atomicAdd(&counters[count], 1u);
+    let k = atomicAdd(&counters[frame_word(count)], 1u);
     if k % TOUCHED_WORKGROUP == 0u {
         grow_dispatch(dispatch, k / TOUCHED_WORKGROUP);
     }
     return k;
 }
 
-// Makes the indirect dispatch at word `dispatch` reach workgroup g: G groups in all as
-// min(G, TOUCHED_MAX_GROUPS) x ceil(G / TOUCHED_MAX_GROUPS) x 1.
+// Makes the wave's indirect dispatch at word `dispatch` reach workgroup g of every frame:
+// G groups in all as min(G, TOUCHED_MAX_GROUPS) x ceil(G / TOUCHED_MAX_GROUPS) x the wave's
+// listed frames (sized by the frame of the longest list; the others' extra workgroups
+// return at once).
 fn grow_dispatch(dispatch: u32, g: u32) {
     atomicMax(&counters[dispatch], min(g + 1u, TOUCHED_MAX_GROUPS));
     atomicMax(&counters[dispatch + 1u], g / TOUCHED_MAX_GROUPS + 1u);
-    atomicStore(&counters[dispatch + 2u], 1u);
+    atomicStore(&counters[dispatch + 2u], frame.listed_frames);
 }
 
 fn tiles_x() -> u32 {
@@ -117,7 +119,7 @@ fn range_moved(r: vec4<i32>) -> bool {
     let texels = f32(sensor.texels);
     for (var j = r.y; j <= r.w; j += 2) {
         for (var i = r.x; i <= r.z; i += 2) {
-            let block = textureGather(0, height_map, map_sampler, vec2<f32>(f32(i + 1), f32(j + 1)) / texels);
+            let block = textureGather(0, height_map, map_sampler, vec2<f32>(f32(i + 1), f32(j + 1)) / texels, frame.lane);
             if any(block != vec4<f32>(0.0)) {
                 return true;
             }
@@ -135,7 +137,8 @@ fn range_moved(r: vec4<i32>) -> bool {
 // Displaced texels lie in frame.texel_rect (the height map is zero elsewhere). Mirror:
 // src/render/touched.rs select_tiles.
 @compute @workgroup_size(8)
-fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
+fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    use_frame(group.z);
     let r = frame.pixel_rect;
     let tx0 = r.x / PIXEL_TILE;
     let ty0 = r.y / PIXEL_TILE;
@@ -158,9 +161,9 @@ fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     // One workgroup of select_listed per tile.
-    let e = atomicAdd(&counters[TILE_COUNT], 1u);
+    let e = atomicAdd(&counters[frame_word(TILE_COUNT)], 1u);
     grow_dispatch(SELECT_DISPATCH, e);
-    atomicStore(&counters[TOUCHED_LIST + list_capacity() + e], tile);
+    atomicStore(&counters[frame.list_at + list_capacity() + e], tile);
 }
 
 // Then the pixels of the listed tiles, a workgroup (PIXEL_TILE x PIXEL_TILE) a tile, within
@@ -168,11 +171,12 @@ fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
 // rect alone). Mirror: src/render/touched.rs select_touched.
 @compute @workgroup_size(8, 8)
 fn select_listed(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    use_frame(group.z);
     let e = group.y * TOUCHED_MAX_GROUPS + group.x;
-    if e >= atomicLoad(&counters[TILE_COUNT]) {
+    if e >= atomicLoad(&counters[frame_word(TILE_COUNT)]) {
         return;
     }
-    let tile = atomicLoad(&counters[TOUCHED_LIST + list_capacity() + e]);
+    let tile = atomicLoad(&counters[frame.list_at + list_capacity() + e]);
     let x = (tile % tiles_x()) * PIXEL_TILE + local.x;
     let y = (tile / tiles_x()) * PIXEL_TILE + local.y;
     let r = frame.pixel_rect;

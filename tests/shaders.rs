@@ -376,7 +376,19 @@ fn bindings_table_equals_the_shaders() {
                 (AddressSpace::Storage { access }, _) => Some(Kind::Storage {
                     read_only: !access.contains(StorageAccess::STORE),
                 }),
-                (AddressSpace::Handle, TypeInner::Image { .. }) => Some(Kind::Texture),
+                (AddressSpace::Handle, TypeInner::Image { arrayed, class, .. }) => {
+                    match (arrayed, class) {
+                        (
+                            _,
+                            naga::ImageClass::Sampled {
+                                kind: naga::ScalarKind::Uint,
+                                ..
+                            },
+                        ) => Some(Kind::UintTexture),
+                        (true, _) => Some(Kind::TextureArray),
+                        (false, _) => Some(Kind::Texture),
+                    }
+                }
                 (AddressSpace::Handle, TypeInner::Sampler { .. }) => Some(Kind::Sampler),
                 _ => None,
             };
@@ -520,6 +532,14 @@ fn uniform_structs_equal_the_shaders() {
         member!(F, pressed_rect),
         member!(F, meridian_rect),
         member!(F, object_size),
+        member!(F, lane),
+        member!(F, image_at),
+        member!(F, counters_at),
+        member!(F, field_at),
+        member!(F, listed_frames),
+        member!(F, image_size[0] as "image_w"),
+        member!(F, image_size[1] as "image_h"),
+        member!(F, list_at),
     ];
     let source = geltip::gpu::shaders::compose("contact").unwrap();
     let module = naga::front::wgsl::parse_str(&source).unwrap();

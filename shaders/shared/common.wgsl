@@ -102,6 +102,27 @@ struct Frame {
     meridian_rect: vec4<u32>,
     // A sized primitive's sizes (object.wgsl primitive_sdf); zero for other objects.
     object_size: vec4<f32>,
+    // Where the frame's data lies in the buffers bound for its wave: its lane (heightfield
+    // and map layer), the words its image and indentation slice and its counters start at,
+    // and a contact's own penetration field's first word in `height` (contact.wgsl).
+    lane: u32,
+    image_at: u32,
+    counters_at: u32,
+    field_at: u32,
+    // Frames of the wave whose pixels are selected and cast (touched.wgsl grow_dispatch).
+    listed_frames: u32,
+    // The size of the rect the image buffers hold (from image_x, image_y).
+    image_w: u32,
+    image_h: u32,
+    // The word of `counters` where the frame's touched list starts, its tile list after it.
+    list_at: u32,
+}
+
+// A frame uniform in its place of the frame uniforms' buffer (src/render/gpu/resources.rs
+// UNIFORM_STRIDE bytes apart).
+struct FrameSlot {
+    frame: Frame,
+    pad: array<vec4<u32>, 2>,
 }
 
 // The sensor's lens model, ray steps, kernel taps, LED count and shading exponents (the
@@ -134,13 +155,21 @@ const GRID_OBJECT: u32 = 100u;
 const REFERENCE_FRAME: u32 = 101u;
 
 @group(0) @binding(0) var<uniform> sensor: Sensor;
-@group(0) @binding(1) var<uniform> frame: Frame;
+// The frames of a dispatch, by the third coordinate of its workgroups: a dispatch runs a
+// stage over every frame (or piece of one) of a wave at once, each reading its own.
+@group(0) @binding(1) var<uniform> frames: array<FrameSlot, FRAMES_BOUND>;
+const FRAMES_BOUND: u32 = 256u;
+// The frame an invocation works on (use_frame).
+var<private> frame: Frame;
+// The heightfield's buffers hold every lane's, texels x texels each (texel_index); its maps
+// are arrays of a layer per lane.
 // Stage 1 output: penetration of the object along the normal, per texel.
 @group(0) @binding(2) var<storage, read_write> penetration: array<f32>;
 // Stage 2 scratch: (drape, narrow blend, wide blend, -) along meridians; once the skin is
 // known, the offsets of its normals from the undeformed ones (read by the camera).
 @group(0) @binding(3) var<storage, read_write> elastomer_scratch: array<vec4<f32>>;
-// Stage 2 output: the skin's inward displacement, per texel.
+// Stage 2 output: the skin's inward displacement, per texel. After the lanes' texels, the
+// contacts' own penetration fields (contact.wgsl).
 @group(0) @binding(4) var<storage, read_write> height: array<f32>;
 // Written once by the reference frame, PROBES_STRIDE vec4 per pixel: the disc positions of
 // the three probes of the pixel's ray and where it enters and leaves the gel, (a.xy, b.xy),
@@ -152,23 +181,25 @@ const REFERENCE_FRAME: u32 = 101u;
 // of their own: WebGPU guarantees eight storage buffers a stage, and these are the eight.)
 @group(0) @binding(5) var<storage, read_write> probes: array<vec4<f32>>;
 const PROBES_STRIDE: u32 = 2u;
-// The image: packed RGBA8 per pixel.
+// The image: packed RGBA8 per pixel; each frame's slice from frame.image_at.
 @group(0) @binding(6) var<storage, read_write> image: array<u32>;
-// Indentation (mm) each pixel sees.
+// Indentation (mm) each pixel sees, in slices as the image's.
 @group(0) @binding(7) var<storage, read_write> indentation: array<f32>;
 // A loaded mesh's SDF: x fastest, then y, then z.
 @group(0) @binding(8) var<storage, read> sdf_grid: array<f32>;
-// The frame's counters and its touched-pixel list: words below, the list's places in
-// shared/touched_list.wgsl.
+// Each frame's counters from frame.counters_at (words below: frame_word; a wave's frames'
+// counters side by side) and its touched-pixel and tile lists from frame.list_at
+// (shared/touched_list.wgsl). The indirect dispatches' arguments are the wave's, in its
+// first frame's words.
 @group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
 // What the heightfield's samplers read (taps along the surface, steps along a ray): copies of
 // the three buffers above as textures, refreshed after each stage that writes them
 // (src/render/gpu/stages.rs). Why: llvmpipe (Mesa 22) loads a storage buffer at an index that
 // differs between invocations one invocation at a time, with two branches each, while it
 // fetches texels for all eight lanes at once.
-@group(0) @binding(10) var penetration_map: texture_2d<f32>;
-@group(0) @binding(11) var elastomer_map: texture_2d<f32>;
-@group(0) @binding(12) var height_map: texture_2d<f32>;
+@group(0) @binding(10) var penetration_map: texture_2d_array<f32>;
+@group(0) @binding(11) var elastomer_map: texture_2d_array<f32>;
+@group(0) @binding(12) var height_map: texture_2d_array<f32>;
 // The same for the rays' probes: pixel (x, y)'s two vec4 are texels (2x, y) and (2x + 1, y).
 @group(0) @binding(13) var probe_map: texture_2d<f32>;
 const PROBE_TILE_STRIDE: u32 = 3u;
@@ -176,6 +207,31 @@ const PIXEL_TILE: u32 = 8u;
 // Nearest, clamped to the edge: only for textureGather, which fetches a texel's 2x2 block
 // in one sampler operation (the weights and the zero outside the grid are ours).
 @group(0) @binding(14) var map_sampler: sampler;
+// The empty finger's image, packed RGBA8 (start.wgsl copies a frame's rect of it).
+@group(0) @binding(15) var reference_image: texture_2d<u32>;
+
+// Makes the invocation work on frame k of its dispatch's frames: k the workgroup's third
+// coordinate, which llvmpipe knows to be one value for the workgroup (a uniform load then,
+// where an invocation's own coordinate would be a load per invocation).
+fn use_frame(k: u32) {
+    frame = frames[k].frame;
+}
+
+// Word w of the frame's counters.
+fn frame_word(w: u32) -> u32 {
+    return frame.counters_at + w;
+}
+
+// Where pixel xy lies in the image and indentation buffers, which hold only the rect of the
+// image a frame can change (a contact frame copies, clears and reads back that much).
+fn image_index(xy: vec2<u32>) -> u32 {
+    return frame.image_at + (xy.y - frame.image_y) * frame.image_pitch + (xy.x - frame.image_x);
+}
+
+// Texel (i, j) of the frame's lane in the heightfield's buffers.
+fn texel_index(i: u32, j: u32) -> u32 {
+    return (frame.lane * sensor.texels + j) * sensor.texels + i;
+}
 
 // Texels pressed beyond the shell.
 const OVER_PRESSED: u32 = 0u;
@@ -191,8 +247,9 @@ const DEEP_DISPATCH: u32 = 8u;
 // select_listed over them (three words).
 const TILE_COUNT: u32 = 3u;
 const SELECT_DISPATCH: u32 = 12u;
-// The touched pixels' indices (y * width + x) start here; the list holds a frame's pixels.
-// The tile list follows it (tile indices, row by row on the image's grid of tiles).
+// Words of a frame's counters (the rest of a frame's words are its lists, from
+// frame.list_at: the touched pixels' indices (y * width + x), a place per pixel of the
+// image, then the tile list's tile indices, row by row on the image's grid of tiles).
 const TOUCHED_LIST: u32 = 64u;
 // Invocations per workgroup of the passes over the touched list.
 const TOUCHED_WORKGROUP: u32 = 64u;
@@ -377,21 +434,21 @@ fn gather_corner(t: vec2<f32>) -> vec2<f32> {
     return (floor(t - 0.5) + 1.0) / f32(sensor.texels);
 }
 
-fn sample_map_x(map: texture_2d<f32>, t: vec2<f32>) -> f32 {
-    return dot(textureGather(0, map, map_sampler, gather_corner(t)), gather_weights(t));
+fn sample_map_x(map: texture_2d_array<f32>, t: vec2<f32>) -> f32 {
+    return dot(textureGather(0, map, map_sampler, gather_corner(t), frame.lane), gather_weights(t));
 }
 
-fn sample_map_y(map: texture_2d<f32>, t: vec2<f32>) -> f32 {
-    return dot(textureGather(1, map, map_sampler, gather_corner(t)), gather_weights(t));
+fn sample_map_y(map: texture_2d_array<f32>, t: vec2<f32>) -> f32 {
+    return dot(textureGather(1, map, map_sampler, gather_corner(t), frame.lane), gather_weights(t));
 }
 
-fn sample_map_xyz(map: texture_2d<f32>, t: vec2<f32>) -> vec3<f32> {
+fn sample_map_xyz(map: texture_2d_array<f32>, t: vec2<f32>) -> vec3<f32> {
     let w = gather_weights(t);
     let at = gather_corner(t);
     return vec3<f32>(
-        dot(textureGather(0, map, map_sampler, at), w),
-        dot(textureGather(1, map, map_sampler, at), w),
-        dot(textureGather(2, map, map_sampler, at), w),
+        dot(textureGather(0, map, map_sampler, at, frame.lane), w),
+        dot(textureGather(1, map, map_sampler, at, frame.lane), w),
+        dot(textureGather(2, map, map_sampler, at, frame.lane), w),
     );
 }
 

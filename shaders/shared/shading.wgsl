@@ -122,9 +122,3 @@ fn write_pixel(xy: vec2<u32>, colour: vec3<f32>, depth: f32) {
     }
     indentation[i] = depth;
 }
-
-// Where pixel xy lies in the image and indentation buffers, which hold only the rect of the
-// image a frame can change (a contact frame copies, clears and reads back that much).
-fn image_index(xy: vec2<u32>) -> u32 {
-    return (xy.y - frame.image_y) * frame.image_pitch + (xy.x - frame.image_x);
-}

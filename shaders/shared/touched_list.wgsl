@@ -1,7 +1,7 @@
 //! use shared/common.wgsl
-// The touched list in a frame's `counters` (from word TOUCHED_LIST, a place per pixel of the
-// image): the shallow pixels' indices (y * width + x) from its front, the deep ones' from its
-// back. touched.wgsl fills it; the camera's passes over the touched pixels read it.
+// The touched list of a frame (from word frame.list_at of `counters`, a place per pixel of
+// the image): the shallow pixels' indices (y * width + x) from its front, the deep ones'
+// from its back. touched.wgsl fills it; the camera's passes over the touched pixels read it.
 
 // Pixels the touched list holds: a frame's.
 fn list_capacity() -> u32 {
@@ -10,7 +10,7 @@ fn list_capacity() -> u32 {
 
 // Where place k of the touched list's shallow (front) or deep (back) part is.
 fn listed_at(k: u32, deep: bool) -> u32 {
-    return select(TOUCHED_LIST + k, TOUCHED_LIST + list_capacity() - 1u - k, deep);
+    return frame.list_at + select(k, list_capacity() - 1u - k, deep);
 }
 
 // The pixel at place k of the touched list's shallow (front) or deep (back) part.

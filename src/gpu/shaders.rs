@@ -28,6 +28,7 @@ use crate::error::{GeltipError, Result};
 
 /// The embedded stage shaders: `(stage name, text of shaders/<stage name>.wgsl)`.
 pub const STAGES: &[(&str, &str)] = &[
+    ("start", include_str!("../../shaders/start.wgsl")),
     ("contact", include_str!("../../shaders/contact.wgsl")),
     ("elastomer", include_str!("../../shaders/elastomer.wgsl")),
     ("touched", include_str!("../../shaders/touched.wgsl")),

@@ -101,9 +101,26 @@ pub struct FrameUniform {
     pub meridian_rect: [u32; 4],
     /// A sized primitive's sizes (`Primitive::gpu_size`); zero for other objects.
     pub object_size: [f32; 4],
+    /// Where a frame's data lies in the buffers bound for its wave (the frames of a
+    /// submission recorded side by side, whose stages each run as one dispatch): its lane
+    /// (its heightfield, and layer of the maps), the word its image and indentation slice
+    /// starts at, the word its counters start at, and the word of the height buffer where a
+    /// contact's own penetration field starts (`contact.wgsl`).
+    pub lane: u32,
+    pub image_at: u32,
+    pub counters_at: u32,
+    pub field_at: u32,
+    /// Frames of the wave whose pixels are selected and cast: the indirect dispatches'
+    /// third dimension (`touched.wgsl` grow_dispatch).
+    pub listed_frames: u32,
+    /// The size of the rect the image buffers hold (with `image_origin`).
+    pub image_size: [u32; 2],
+    /// The word of the counters binding where the frame's touched list starts, its tile
+    /// list after it (`shared/touched_list.wgsl`).
+    pub list_at: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 192);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 224);
 
 /// `object_kind` of a loaded mesh's baked SDF grid (WGSL `GRID_OBJECT`).
 pub const GRID_OBJECT: u32 = 100;
@@ -267,6 +284,7 @@ impl FrameUniform {
             object_kind: REFERENCE_FRAME,
             noise_seed,
             image_pitch: image_pitch(sensor.width),
+            image_size: [sensor.width, sensor.height],
             ..Zeroable::zeroed()
         }
     }
@@ -280,6 +298,7 @@ impl FrameUniform {
             h: 0,
         });
         self.image_origin = [r.x, r.y];
+        self.image_size = [r.w, r.h];
         self.image_pitch = image_pitch(r.w);
         self
     }
@@ -332,6 +351,7 @@ impl FrameUniform {
                 Object::Primitive { shape, .. } => shape.gpu_size(),
                 _ => [0.0; 4],
             },
+            ..Zeroable::zeroed()
         }
     }
 }

@@ -2,14 +2,15 @@
 //! and every bind group, and `shaders/shared/common.wgsl` declares the same bindings
 //! (`tests/shaders.rs` holds the table to the shader's names and kinds).
 
-use super::resources::{Map, Resources};
+use super::resources::{held_bytes, Map, Resources, UNIFORM_STRIDE};
 use crate::render::uniforms::FrameUniform;
+use crate::render::Rect;
 
 /// What a binding holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Binding {
     Sensor,
-    Frame,
+    Frames,
     Penetration,
     ElastomerScratch,
     Height,
@@ -23,12 +24,13 @@ pub enum Binding {
     HeightMap,
     ProbeMap,
     MapSampler,
+    ReferenceImage,
 }
 
 /// Every binding of group 0, at its binding number.
-pub const BINDINGS: [Binding; 15] = [
+pub const BINDINGS: [Binding; 16] = [
     Binding::Sensor,
-    Binding::Frame,
+    Binding::Frames,
     Binding::Penetration,
     Binding::ElastomerScratch,
     Binding::Height,
@@ -42,6 +44,7 @@ pub const BINDINGS: [Binding; 15] = [
     Binding::HeightMap,
     Binding::ProbeMap,
     Binding::MapSampler,
+    Binding::ReferenceImage,
 ];
 
 /// How a binding is declared.
@@ -53,6 +56,10 @@ pub enum Kind {
     },
     /// A 2D texture of unfilterable floats.
     Texture,
+    /// An array of them.
+    TextureArray,
+    /// A 2D texture of unsigned integers.
+    UintTexture,
     /// A non-filtering sampler.
     Sampler,
 }
@@ -62,7 +69,7 @@ impl Binding {
     pub fn wgsl_name(self) -> &'static str {
         match self {
             Binding::Sensor => "sensor",
-            Binding::Frame => "frame",
+            Binding::Frames => "frames",
             Binding::Penetration => "penetration",
             Binding::ElastomerScratch => "elastomer_scratch",
             Binding::Height => "height",
@@ -76,12 +83,13 @@ impl Binding {
             Binding::HeightMap => "height_map",
             Binding::ProbeMap => "probe_map",
             Binding::MapSampler => "map_sampler",
+            Binding::ReferenceImage => "reference_image",
         }
     }
 
     pub fn kind(self) -> Kind {
         match self {
-            Binding::Sensor | Binding::Frame => Kind::Uniform,
+            Binding::Sensor | Binding::Frames => Kind::Uniform,
             Binding::SdfGrid => Kind::Storage { read_only: true },
             Binding::Penetration
             | Binding::ElastomerScratch
@@ -90,10 +98,11 @@ impl Binding {
             | Binding::Image
             | Binding::Indentation
             | Binding::Counters => Kind::Storage { read_only: false },
-            Binding::PenetrationMap
-            | Binding::ElastomerMap
-            | Binding::HeightMap
-            | Binding::ProbeMap => Kind::Texture,
+            Binding::PenetrationMap | Binding::ElastomerMap | Binding::HeightMap => {
+                Kind::TextureArray
+            }
+            Binding::ProbeMap => Kind::Texture,
+            Binding::ReferenceImage => Kind::UintTexture,
             Binding::MapSampler => Kind::Sampler,
         }
     }
@@ -104,14 +113,21 @@ impl Binding {
             has_dynamic_offset: false,
             min_binding_size: None,
         };
+        let texture = |sample_type, view_dimension| wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension,
+            multisampled: false,
+        };
+        let floats = wgpu::TextureSampleType::Float { filterable: false };
         let ty = match self.kind() {
             Kind::Uniform => buffer(wgpu::BufferBindingType::Uniform),
             Kind::Storage { read_only } => buffer(wgpu::BufferBindingType::Storage { read_only }),
-            Kind::Texture => wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
+            Kind::Texture => texture(floats, wgpu::TextureViewDimension::D2),
+            Kind::TextureArray => texture(floats, wgpu::TextureViewDimension::D2Array),
+            Kind::UintTexture => texture(
+                wgpu::TextureSampleType::Uint,
+                wgpu::TextureViewDimension::D2,
+            ),
             Kind::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
         };
         wgpu::BindGroupLayoutEntry {
@@ -123,35 +139,43 @@ impl Binding {
     }
 
     fn resource<'a>(self, r: &'a Resources, f: &FrameBinding<'a>) -> wgpu::BindingResource<'a> {
-        let slice = |buffer: &'a wgpu::Buffer, bytes: u64| {
+        let w = f.wave;
+        let slice = |buffer: &'a wgpu::Buffer, offset: u64, bytes: u64| {
             wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                 buffer,
-                offset: f.slot * bytes,
+                offset,
                 size: std::num::NonZeroU64::new(bytes),
             })
         };
-        let heightfield = &r.heightfields[f.lane];
+        // At least one image row's bytes, for a wave whose frames hold no pixels.
+        let image_bytes = w.image_bytes.max(256);
+        let heightfield = &r.heightfield;
         let map = |m: Map| wgpu::BindingResource::TextureView(&heightfield.map(m).view);
         match self {
             Binding::Sensor => r.sensor.as_entire_binding(),
-            Binding::Frame => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            Binding::Frames => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                 buffer: f.uniform,
                 offset: f.uniform_offset,
-                size: std::num::NonZeroU64::new(FRAME_UNIFORM_BYTES),
+                size: std::num::NonZeroU64::new(FRAMES_BOUND_BYTES),
             }),
             Binding::Penetration => heightfield.buffer(Map::Penetration).as_entire_binding(),
             Binding::ElastomerScratch => heightfield.buffer(Map::Elastomer).as_entire_binding(),
             Binding::Height => heightfield.buffer(Map::Height).as_entire_binding(),
             Binding::Probes => r.probes.as_entire_binding(),
-            Binding::Image => slice(&r.image, r.slot_bytes),
-            Binding::Indentation => slice(&r.indentation, r.slot_bytes),
+            Binding::Image => slice(&r.image, w.image_offset, image_bytes),
+            Binding::Indentation => slice(&r.indentation, w.image_offset, image_bytes),
             Binding::SdfGrid => f.grid.as_entire_binding(),
-            Binding::Counters => slice(&r.counters, r.counter_bytes),
+            Binding::Counters => slice(
+                &r.counters,
+                w.first_slot * r.counter_bytes,
+                w.slots * r.counter_bytes,
+            ),
             Binding::PenetrationMap => map(Map::Penetration),
             Binding::ElastomerMap => map(Map::Elastomer),
             Binding::HeightMap => map(Map::Height),
             Binding::ProbeMap => wgpu::BindingResource::TextureView(&r.probe_map.view),
             Binding::MapSampler => wgpu::BindingResource::Sampler(&r.map_sampler),
+            Binding::ReferenceImage => wgpu::BindingResource::TextureView(&r.reference_view),
         }
     }
 }
@@ -164,19 +188,53 @@ pub(super) fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
         .collect()
 }
 
-/// Bytes of a frame uniform as bound.
-const FRAME_UNIFORM_BYTES: u64 = std::mem::size_of::<FrameUniform>() as u64;
+/// Frame uniforms a bind group holds (WGSL `FRAMES_BOUND`): a dispatch's frames, by the
+/// third coordinate of its workgroups.
+pub const FRAMES_BOUND: u64 = 256;
 
-/// What differs between the bind groups: the frame uniform (at `uniform_offset` of
-/// `uniform`), the frame's slot of a submission (its slices of the image, indentation and
-/// counters buffers), its lane (the heightfield it works on), and the SDF grid its contact
-/// pass traces (a loaded mesh's, else an empty one).
+/// Bytes of the frame uniforms as bound: [`FRAMES_BOUND`] of them, [`UNIFORM_STRIDE`] apart
+/// (64 KiB, WebGPU's least limit on a uniform binding).
+pub(super) const FRAMES_BOUND_BYTES: u64 = FRAMES_BOUND * UNIFORM_STRIDE;
+
+const _: () = assert!(std::mem::size_of::<FrameUniform>() as u64 <= UNIFORM_STRIDE);
+
+/// Where a wave's frames lie in the frame buffers: `slots` slots of the counters from
+/// `first_slot`, and `image_bytes` of the image and indentation buffers from
+/// `image_offset` (the frames' held rects, packed in order: [`packed_offsets`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct WaveRange {
+    pub first_slot: u64,
+    pub slots: u64,
+    pub image_offset: u64,
+    pub image_bytes: u64,
+}
+
+/// What differs between the bind groups: the frame uniforms (from `uniform_offset` of
+/// `uniform`), the wave whose frames they are, and the SDF grid a contact pass traces (a
+/// loaded mesh's, else an empty one). Every group binds the whole heightfield, every
+/// lane's.
 pub(super) struct FrameBinding<'a> {
     pub uniform: &'a wgpu::Buffer,
     pub uniform_offset: u64,
-    pub slot: u64,
-    pub lane: usize,
+    pub wave: WaveRange,
     pub grid: &'a wgpu::Buffer,
+}
+
+/// Where each frame's held rect (`None`: nothing) starts in the image and indentation
+/// buffers, packed in order so that a submission's frames are read back in one copy each;
+/// and the bytes they take. (Each rect's bytes are whole 256-byte rows: every offset is
+/// aligned for a binding.)
+pub(super) fn packed_offsets(rects: &[Option<Rect>]) -> (Vec<u64>, u64) {
+    let mut at = 0;
+    let offsets = rects
+        .iter()
+        .map(|r| {
+            let offset = at;
+            at += r.map_or(0, held_bytes);
+            offset
+        })
+        .collect();
+    (offsets, at)
 }
 
 impl Resources {

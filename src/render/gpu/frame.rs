@@ -4,20 +4,31 @@
 //! elastomer's passes over the union of the footprints, split into disjoint rectangles (the
 //! cost follows the footprints' area, not the number of objects); then the touched pixels of
 //! the union of their pixel rects, cast, shaded and given noise. Each contact's labels come
-//! from its own penetration field, read back with the frames. The frames of a wave
-//! ([`Renderer::lanes`] of them) are recorded stage by stage, each on its own heightfield.
+//! from its own penetration field, read back with the frames.
+//!
+//! The frames of a wave ([`Renderer::lanes`] of them, each on its own heightfield) are
+//! recorded stage by stage, each stage one dispatch over all of them: the frame (or piece
+//! of a frame) is the third coordinate of its workgroups, and its uniform the one at that
+//! place of the dispatch's bind group; a dispatch sized on the GPU is sized by the wave's
+//! longest list. The copies between stages (the maps' refreshes, the heightfield's clears,
+//! the indirect dispatches' arguments) are one each for the wave. Why: wgpu puts a barrier
+//! before every dispatch and copy that writes, and on a GPU those barriers, not the work,
+//! were a frame's time.
 
-use super::bindings::FrameBinding;
-use super::layout::{COUNTER_HEADER_BYTES, DEEP_COUNT, OVER_PRESSED, SHALLOW_COUNT, TILE_COUNT};
+use super::bindings::{packed_offsets, FrameBinding, WaveRange, FRAMES_BOUND};
+use super::layout::{
+    groups, COUNTER_HEADER_BYTES, OVER_PRESSED, SELECT_TILES_WORKGROUP, WORKGROUP,
+};
+use super::layout::{DEEP_COUNT, SHALLOW_COUNT, TILE_COUNT};
 use super::prepare::{too_many, Prepared};
 use super::readback::ReadFrames;
-use super::record::{Recorder, Stage};
-use super::resources::{held_bytes, Heightfield, Map, UNIFORM_STRIDE};
-use super::stages::ContactPass;
-use super::stages::{copy_dispatch_args, TILE_LIST_ARGS, TOUCHED_LIST_ARGS};
+use super::record::{Groups, Recorder, Stage};
+use super::resources::{held_bytes, LaneSpan, Map, UNIFORM_STRIDE};
+use super::stages::{copy_dispatch_args, Batch, TILE_LIST_ARGS, TOUCHED_LIST_ARGS};
 use super::{Renderer, Timings};
 use crate::error::Result;
 use crate::object::Object;
+use crate::render::touched::tiles_over;
 use crate::render::uniforms::{rect4, FrameUniform};
 use crate::render::{Frame, GroundTruth, Rect};
 use rayon::prelude::*;
@@ -36,40 +47,21 @@ pub(super) struct FramePlan {
     pub meridians: Vec<Rect>,
     /// The pixels that can see those texels: the span the tile list is chosen from.
     pub pixels: Option<Rect>,
-    /// The rect of the image the frame's buffers hold ([`Renderer::changed_rect`]).
+    /// The rect of the image the frame's buffers hold ([`Renderer::changed_rect`]), and
+    /// where in the image and indentation buffers ([`packed_offsets`]).
     pub holding: Option<Rect>,
-    /// The texels cleared before its contact passes, whose maps each stage refreshes: its
-    /// texels' span and whatever the maps still hold from the frame before, so that they
-    /// are zero outside its texels afterwards.
-    pub region: Option<Rect>,
+    pub image_offset: u64,
     /// Its frame uniform: the first contact's, holding its image rect, its noise seed, and
-    /// as its rects the spans of the pieces. A piece's pass binds it with the piece as its
+    /// as its rects the spans of the pieces. A piece's pass reads it with the piece as its
     /// rect (each stage reads only the rect it runs over: `shaders/shared/common.wgsl`).
     pub uniform: FrameUniform,
 }
 
-/// A frame's bind groups, as indices into [`BindGroups::groups`].
-pub(super) struct FrameBinds {
-    contacts: Vec<usize>,
-    frame: usize,
-    texels: Vec<usize>,
-    meridians: Vec<usize>,
-}
-
-/// A submission's bind groups. The frame uniforms go into one buffer, written once
-/// ([`super::resources::Resources::write_uniforms`]), each group binding its own; the passes
-/// of a frame whose uniforms are equal share one: a frame of one contact binds one for all
-/// its passes.
-#[derive(Default)]
-pub(super) struct BindGroups {
-    pub groups: Vec<wgpu::BindGroup>,
-}
-
-/// The bind groups of a submission, planned before any is made: per group, its frame's
-/// slot, its uniform and the object whose SDF grid it binds (a contact's) or none.
-#[derive(Default)]
-struct BindPlan<'c> {
-    groups: Vec<(u64, FrameUniform, Option<&'c Object>)>,
+impl FramePlan {
+    /// The span of its texels: whether (and where) its contacts press the skin.
+    fn texel_span(&self) -> Option<Rect> {
+        span(&self.texels)
+    }
 }
 
 /// The smallest rect covering `rects`.
@@ -77,83 +69,88 @@ fn span(rects: &[Rect]) -> Option<Rect> {
     rects.iter().copied().reduce(|a, b| a.union(&b))
 }
 
-impl<'c> BindPlan<'c> {
-    /// A contact's: its own, as it binds its object's SDF grid.
-    fn contact(&mut self, slot: u64, u: FrameUniform, object: &'c Object) -> usize {
-        self.groups.push((slot, u, Some(object)));
-        self.groups.len() - 1
-    }
+/// Workgroups over the largest of `rects` (one invocation a texel or pixel, at least
+/// `least` workgroups a side), for `frames` frames.
+fn over_largest(rects: impl Iterator<Item = Rect>, least: u32, frames: u32) -> Groups {
+    let (w, h) = rects.fold((0, 0), |(w, h), r| (r.w.max(w), r.h.max(h)));
+    let side = |n| groups(n, WORKGROUP).max(least);
+    Groups::Direct(side(w), side(h), frames)
+}
 
-    /// One for uniform `u` in frame `slot`: the frame's group of an equal uniform if it has
-    /// one (whatever SDF grid it binds: only the contact passes read it).
-    fn shared(&mut self, slot: u64, u: FrameUniform) -> usize {
-        let same = |(s, v, _): &(u64, FrameUniform, Option<&Object>)| {
-            *s == slot && bytemuck::bytes_of(v) == bytemuck::bytes_of(&u)
-        };
-        match self.groups.iter().position(same) {
-            Some(k) => k,
-            None => {
-                self.groups.push((slot, u, None));
-                self.groups.len() - 1
-            }
-        }
-    }
+/// How a wave's frames start ([`Renderer::record_wave`]).
+pub(super) enum Start {
+    /// A frame alone: copies and clears (on a software device these are memory copies,
+    /// where a pass would write pixel by pixel), the frame's slot, image offset and held
+    /// rect.
+    Copies(u64, u64, Option<Rect>),
+    /// Several: the start pass over all of them (`shaders/start.wgsl`).
+    Pass(Dispatches),
+}
 
-    /// The bind groups of `plan`'s frame of `contacts`.
-    fn frame(&mut self, plan: &FramePlan, contacts: &'c [Prepared]) -> FrameBinds {
-        let slot = plan.slot;
-        let contacts = contacts
-            .iter()
-            .map(|p| {
-                let mut u = p.uniform.holding(plan.holding);
-                u.noise_seed = plan.uniform.noise_seed;
-                self.contact(slot, u, &p.press.object)
+impl Default for Start {
+    fn default() -> Self {
+        Start::Pass(Vec::new())
+    }
+}
+
+/// A stage's dispatches, as bind groups' indices and workgroups.
+type Dispatches = Vec<(usize, Groups)>;
+
+/// What a wave of frames records, its bind groups as indices into the submission's.
+#[derive(Default)]
+pub(super) struct Wave {
+    /// Its first frame's slot: the indirect dispatches' arguments are there.
+    first_slot: u64,
+    /// The heightfield its frames clear and refresh, if any presses it.
+    span: Option<LaneSpan>,
+    start: Start,
+    /// Per round (each frame's k-th contact), the dispatches of each kind of object.
+    contacts: Vec<Vec<(u32, usize, Groups)>>,
+    meridians: Dispatches,
+    texels: Dispatches,
+    /// The tile lists' dispatch, and the bind group of the passes sized by them.
+    listed: Option<(usize, Groups)>,
+    noise: Dispatches,
+}
+
+/// A submission's frame uniforms, grouped into the bind groups its dispatches bind: per
+/// group, its first uniform, its wave, and the object whose SDF grid it binds (a contact's)
+/// or none.
+#[derive(Default)]
+struct Binds<'c> {
+    uniforms: Vec<FrameUniform>,
+    groups: Vec<(usize, WaveRange, Option<&'c Object>)>,
+}
+
+impl<'c> Binds<'c> {
+    /// Bind groups for a dispatch over `items` of the wave `slots`: as many as it takes to
+    /// hold them, [`FRAMES_BOUND`] each, with how many each holds.
+    fn add(
+        &mut self,
+        items: &[FrameUniform],
+        slots: WaveRange,
+        grid: Option<&'c Object>,
+    ) -> Vec<(usize, u32)> {
+        items
+            .chunks(FRAMES_BOUND as usize)
+            .map(|chunk| {
+                self.groups.push((self.uniforms.len(), slots, grid));
+                self.uniforms.extend_from_slice(chunk);
+                (self.groups.len() - 1, chunk.len() as u32)
             })
-            .collect();
-        let frame = self.shared(slot, plan.uniform);
-        let mut piece = |f: &dyn Fn(&mut FrameUniform)| {
-            let mut u = plan.uniform;
-            f(&mut u);
-            self.shared(slot, u)
-        };
-        let texels = plan
-            .texels
-            .iter()
-            .map(|&t| piece(&|u| u.texel_rect = rect4(Some(t))))
-            .collect();
-        let meridians = plan
-            .meridians
-            .iter()
-            .map(|&m| piece(&|u| u.meridian_rect = rect4(Some(m))))
-            .collect();
-        FrameBinds {
-            contacts,
-            frame,
-            texels,
-            meridians,
-        }
+            .collect()
     }
-}
 
-/// A frame of a submission as its recording needs it.
-pub(super) struct FrameWork<'a> {
-    plan: &'a FramePlan,
-    /// Its contacts' passes, those with a footprint.
-    contacts: Vec<ContactPass<'a>>,
-    /// The bind group of its whole-frame passes, and those of its texel and meridian pieces.
-    frame: &'a wgpu::BindGroup,
-    texels: Vec<(Rect, &'a wgpu::BindGroup)>,
-    meridians: Vec<(Rect, &'a wgpu::BindGroup)>,
-    /// Its lane's heightfield.
-    heightfield: &'a Heightfield,
-}
-
-/// Refreshes `map` over the region of each frame of `wave` that presses the skin.
-fn refresh(rec: &mut Recorder, wave: &[FrameWork], map: Map) {
-    for f in wave {
-        if let Some(region) = f.plan.region {
-            f.heightfield.refresh(rec.encoder(), map, Some(region));
-        }
+    /// A dispatch each for `items` (with the rects their passes run over), sized by the
+    /// largest rect.
+    fn over(&mut self, items: &[(FrameUniform, Rect)], slots: WaveRange) -> Dispatches {
+        let uniforms: Vec<FrameUniform> = items.iter().map(|i| i.0).collect();
+        let added = self.add(&uniforms, slots, None);
+        let mut rects = items.iter().map(|i| i.1);
+        added
+            .into_iter()
+            .map(|(k, n)| (k, over_largest(rects.by_ref().take(n as usize), 0, n)))
+            .collect()
     }
 }
 
@@ -175,11 +172,14 @@ impl Renderer {
         }
         let start = Instant::now();
         let ran = self.run_frames(&scenes);
-        let read = self.forget_heightfield_on_error(ran)?;
+        let (read, commands) = self.forget_heightfield_on_error(ran)?;
         let mut timings = Timings {
             prepare,
             render: read.mapped - start,
             record: read.submitted.saturating_duration_since(start),
+            dispatches: commands.0,
+            copies: commands.1,
+            readback_copies: read.copies,
             ..Timings::default()
         };
         for part in &read.frames {
@@ -231,106 +231,74 @@ impl Renderer {
         Ok(out)
     }
 
-    /// Plans, records, submits and reads back the frames of `scenes`.
-    fn run_frames(&mut self, scenes: &[Scene]) -> Result<ReadFrames> {
+    /// Plans, records, submits and reads back the frames of `scenes`; with the dispatches
+    /// and copies recorded.
+    fn run_frames(&mut self, scenes: &[Scene]) -> Result<(ReadFrames, (u64, u64))> {
         let contacts: Vec<&Prepared> = scenes.iter().flat_map(|(c, _)| c).collect();
-        let offsets = self.field_offsets(&contacts);
-        let plans: Vec<FramePlan> = (0..)
+        let offsets = self.field_offsets(&contacts)?;
+        let mut plans: Vec<FramePlan> = (0..)
             .zip(scenes)
             .map(|(slot, (contacts, seed))| self.plan(slot, contacts, *seed))
             .collect();
-        let (groups, binds) = self.bind_frames(&plans, scenes.iter().map(|(c, _)| &c[..]));
-        let contacts_of = scenes.iter().map(|(c, _)| &c[..]);
-        let work = self.frame_work(&plans, contacts_of, &binds, &groups.groups, &offsets);
+        let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
+        for (p, at) in plans.iter_mut().zip(packed_offsets(&rects).0) {
+            p.image_offset = at;
+        }
+        let scene_contacts: Vec<&[Prepared]> = scenes.iter().map(|(c, _)| &c[..]).collect();
+        let (groups, waves) = self.waves(&plans, &scene_contacts, &offsets);
         // One wave goes into the readback's submission; several are recorded side by side
         // and submitted before it.
-        let encoder = if work.len() <= self.lanes {
+        let (encoder, commands) = if waves.len() <= 1 {
             let mut rec = Recorder::new(self.ctx, &self.resources.dispatch_args);
-            self.record_wave(&mut rec, &work)?;
-            rec.finish()
+            if let Some(wave) = waves.first() {
+                self.record_wave(&mut rec, wave, &groups)?;
+            }
+            let commands = rec.commands();
+            (rec.finish(), commands)
         } else {
-            let recorded = self.record_frames(&work)?;
+            let (recorded, commands) = self.record_frames(&waves, &groups)?;
             self.ctx.submit_buffers("rendering contacts", recorded)?;
-            self.ctx.device.create_command_encoder(&Default::default())
+            let encoder = self.ctx.device.create_command_encoder(&Default::default());
+            (encoder, commands)
         };
-        drop(work);
-        let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
         let fields: Vec<Option<(u64, u64)>> = contacts
             .iter()
             .zip(offsets)
             .map(|(p, at)| p.footprint.map(|_| (at, p.field_bytes(self.grid.texels))))
             .collect();
-        self.read_frames("rendering contacts", encoder, &rects, &fields)
+        let read = self.read_frames("rendering contacts", encoder, &rects, &fields)?;
+        Ok((read, commands))
     }
 
-    /// Where each contact's own penetration goes in the penetration fields, packed in order
-    /// (which are made to hold them all).
-    pub(super) fn field_offsets(&mut self, contacts: &[&Prepared]) -> Vec<u64> {
+    /// Where each contact's own penetration goes among the contacts' fields (after the
+    /// lanes' heights in the height buffer), packed in order; the buffer is made to hold
+    /// them all.
+    pub(super) fn field_offsets(&mut self, contacts: &[&Prepared]) -> Result<Vec<u64>> {
         let mut offsets = Vec::with_capacity(contacts.len());
         let mut bytes = 0;
         for p in contacts {
             offsets.push(bytes);
             bytes += p.field_bytes(self.grid.texels);
         }
-        self.resources.reserve_fields(self.ctx, bytes);
-        offsets
+        self.resources.reserve_fields(self.ctx, bytes)?;
+        Ok(offsets)
     }
 
-    /// The bind groups of the frames `plans` plan, of the contacts of each: their uniforms
-    /// written to the frame uniforms' buffer, then a group each.
-    pub(super) fn bind_frames<'c>(
-        &mut self,
-        plans: &[FramePlan],
-        contacts: impl Iterator<Item = &'c [Prepared]>,
-    ) -> (BindGroups, Vec<FrameBinds>) {
-        let mut plan = BindPlan::default();
-        let binds = plans
-            .iter()
-            .zip(contacts)
-            .map(|(p, contacts)| plan.frame(p, contacts))
-            .collect();
-        let uniforms: Vec<FrameUniform> = plan.groups.iter().map(|g| g.1).collect();
-        self.resources.write_uniforms(self.ctx, &uniforms);
-        let res = &self.resources;
-        let groups = (0..)
-            .zip(&plan.groups)
-            .map(|(k, &(slot, _, object))| {
-                let binding = FrameBinding {
-                    uniform: &res.frame_uniforms,
-                    uniform_offset: k * UNIFORM_STRIDE,
-                    slot,
-                    lane: self.lane_of(slot),
-                    grid: object.map_or(&res.empty_grid, |o| res.grid_of(o)),
-                };
-                res.bind_group(&self.ctx.device, binding)
-            })
-            .collect();
-        (BindGroups { groups }, binds)
-    }
-
-    /// The plan of the frame of `contacts` in `slot`; the heightfield's bookkeeping moves on
-    /// to it (the frames of a submission run in order).
-    pub(super) fn plan(&mut self, slot: u64, contacts: &[Prepared], seed: u32) -> FramePlan {
+    /// The plan of the frame of `contacts` in `slot`.
+    pub(super) fn plan(&self, slot: u64, contacts: &[Prepared], seed: u32) -> FramePlan {
         let footprints: Vec<_> = contacts.iter().filter_map(|p| p.footprint).collect();
         let texels = Rect::disjoint(footprints.iter().map(|f| f.texels));
         let meridians = Rect::disjoint(footprints.iter().map(|f| f.meridians));
         let pixels = span(&Rect::disjoint(
             contacts.iter().filter_map(|p| p.pixel_rect()),
         ));
-        let texel_span = span(&texels);
         let holding = self.changed_rect(pixels);
-        let lane = self.lane_of(slot);
-        let region = texel_span.map(|t| {
-            let region = self.dirty[lane].map_or(t, |d| d.union(&t));
-            self.dirty[lane] = Some(t);
-            region
-        });
         let mut uniform = contacts
             .first()
             .map_or(FrameUniform::reference(&self.sensor, seed), |p| p.uniform)
             .holding(holding);
         uniform.noise_seed = seed;
-        uniform.texel_rect = rect4(texel_span);
+        uniform.texel_rect = rect4(span(&texels));
         uniform.pixel_rect = rect4(pixels);
         uniform.meridian_rect = rect4(span(&meridians));
         FramePlan {
@@ -339,59 +307,213 @@ impl Renderer {
             meridians,
             pixels,
             holding,
-            region,
+            image_offset: 0,
             uniform,
         }
     }
 
-    /// What recording the frames `plans` plan needs of each: its contacts' passes (those
-    /// with a footprint), its bind groups and its lane's heightfield.
-    pub(super) fn frame_work<'a>(
-        &'a self,
-        plans: &'a [FramePlan],
-        scenes: impl Iterator<Item = &'a [Prepared]>,
-        binds: &'a [FrameBinds],
-        groups: &'a [wgpu::BindGroup],
-        field_offsets: &[u64],
-    ) -> Vec<FrameWork<'a>> {
-        let pieces = |rects: &[Rect], binds: &[usize]| -> Vec<(Rect, &'a wgpu::BindGroup)> {
-            rects
+    /// The heightfield a wave of frames (`plans`, on lanes in order) clears and refreshes:
+    /// from the first lane its frames press to the last, over every texel their frames
+    /// press and every texel those lanes' maps may hold non-zero (their last frames'), so
+    /// that the maps are zero outside the texels their frames press afterwards (clearing
+    /// and refreshing a zero texel changes nothing). The heightfield's bookkeeping moves on
+    /// to the wave (the waves of a submission run in order).
+    fn wave_span(&mut self, plans: &[FramePlan]) -> Option<LaneSpan> {
+        let pressed = || {
+            plans
                 .iter()
-                .zip(binds)
-                .map(|(&r, &k)| (r, &groups[k]))
-                .collect()
+                .filter_map(|p| Some((self.lane_of(p.slot), p.texel_span()?)))
         };
-        let mut at = field_offsets;
-        plans
+        let first = pressed().map(|(l, _)| l).min()?;
+        let last = pressed().map(|(l, _)| l).max()?;
+        let texels = pressed().map(|(_, t)| t);
+        let dirty = self.dirty[first..=last].iter().flatten().copied();
+        let rect = texels.chain(dirty).reduce(|a, b| a.union(&b))?;
+        for p in plans {
+            let lane = self.lane_of(p.slot);
+            if (first..=last).contains(&lane) {
+                self.dirty[lane] = p.texel_span();
+            }
+        }
+        Some(LaneSpan {
+            first: first as u32,
+            last: last as u32,
+            rect,
+        })
+    }
+
+    /// The waves of the frames `plans` plan, of the contacts of each (their fields at
+    /// `field_offsets`), and the bind groups they bind: the frame uniforms written to the
+    /// frame uniforms' buffer, then a group per dispatch.
+    pub(super) fn waves(
+        &mut self,
+        plans: &[FramePlan],
+        scenes: &[&[Prepared]],
+        field_offsets: &[u64],
+    ) -> (Vec<wgpu::BindGroup>, Vec<Wave>) {
+        let mut binds = Binds::default();
+        let mut waves = Vec::new();
+        let mut fields = field_offsets;
+        for (plans, scenes) in plans.chunks(self.lanes).zip(scenes.chunks(self.lanes)) {
+            let span = self.wave_span(plans);
+            let contacts = scenes.iter().map(|c| c.len()).sum::<usize>();
+            let (mine, rest) = fields.split_at(contacts.min(fields.len()));
+            fields = rest;
+            waves.push(self.wave(&mut binds, plans, scenes, mine, span));
+        }
+        self.resources.write_uniforms(self.ctx, &binds.uniforms);
+        let res = &self.resources;
+        let groups = binds
+            .groups
             .iter()
-            .zip(scenes)
-            .zip(binds)
-            .map(|((plan, contacts), b)| {
-                let (mine, rest) = at.split_at(contacts.len().min(at.len()));
-                at = rest;
-                let passes = contacts
-                    .iter()
-                    .zip(&b.contacts)
-                    .zip(mine)
-                    .filter_map(|((c, &k), &field_offset)| {
-                        c.footprint.map(|f| ContactPass {
-                            bind: &groups[k],
-                            kind: c.uniform.object_kind,
-                            pressed: f.pressed,
-                            field_offset,
-                        })
-                    })
-                    .collect();
-                FrameWork {
-                    plan,
-                    contacts: passes,
-                    frame: &groups[b.frame],
-                    texels: pieces(&plan.texels, &b.texels),
-                    meridians: pieces(&plan.meridians, &b.meridians),
-                    heightfield: &self.resources.heightfields[self.lane_of(plan.slot)],
-                }
+            .map(|&(first, wave, object)| {
+                let binding = FrameBinding {
+                    uniform: &res.frame_uniforms,
+                    uniform_offset: first as u64 * UNIFORM_STRIDE,
+                    wave,
+                    grid: object.map_or(&res.empty_grid, |o| res.grid_of(o)),
+                };
+                res.bind_group(&self.ctx.device, binding)
             })
-            .collect()
+            .collect();
+        (groups, waves)
+    }
+
+    /// The dispatches of a wave of frames (`plans`, of the contacts in `scenes`, whose
+    /// fields go at `fields`), their uniforms added to `binds`.
+    fn wave<'c>(
+        &self,
+        binds: &mut Binds<'c>,
+        plans: &[FramePlan],
+        scenes: &[&'c [Prepared]],
+        fields: &[u64],
+        span: Option<LaneSpan>,
+    ) -> Wave {
+        let res = &self.resources;
+        let first_slot = plans.first().map_or(0, |p| p.slot);
+        let image_offset = plans.first().map_or(0, |p| p.image_offset);
+        let image_end = plans
+            .last()
+            .map_or(0, |p| p.image_offset + p.holding.map_or(0, held_bytes));
+        let slots = WaveRange {
+            first_slot,
+            slots: plans.len() as u64,
+            image_offset,
+            image_bytes: image_end - image_offset,
+        };
+        let seen = plans.iter().filter(|p| p.pixels.is_some()).count() as u32;
+        let fields_at = res.heightfield.fields_at();
+        // Each frame's uniform, with where its data lies in the wave's bindings.
+        let placed: Vec<FrameUniform> = plans
+            .iter()
+            .map(|p| {
+                let mut u = p.uniform;
+                let k = p.slot - first_slot;
+                u.lane = self.lane_of(p.slot) as u32;
+                u.image_at = ((p.image_offset - image_offset) / 4) as u32;
+                // The wave's frames' counters side by side, then their lists: the counters
+                // are read back in one copy.
+                u.counters_at = (k * COUNTER_HEADER_BYTES / 4) as u32;
+                let lists = plans.len() as u64 * COUNTER_HEADER_BYTES;
+                u.list_at = ((lists + k * (res.counter_bytes - COUNTER_HEADER_BYTES)) / 4) as u32;
+                u.listed_frames = seen;
+                u
+            })
+            .collect();
+        let start = match plans {
+            [one] => Start::Copies(one.slot, one.image_offset, one.holding),
+            _ => {
+                let held = plans.iter().filter_map(|p| p.holding);
+                // At least a workgroup a frame: the first clears its counters.
+                let g = |n| over_largest(held.clone(), 1, n);
+                let added = binds.add(&placed, slots, None);
+                Start::Pass(added.into_iter().map(|(k, n)| (k, g(n))).collect())
+            }
+        };
+        let mut wave = Wave {
+            first_slot,
+            span,
+            start,
+            ..Wave::default()
+        };
+        // Round k: each frame's k-th contact that presses the skin, its uniform its frame's
+        // with its own object, rects and field.
+        let mut rounds: Vec<Vec<(&'c Object, FrameUniform, Rect)>> = Vec::new();
+        let mut at = fields;
+        for ((plan, frame), contacts) in plans.iter().zip(&placed).zip(scenes) {
+            let (mine, rest) = at.split_at(contacts.len().min(at.len()));
+            at = rest;
+            let pressing = contacts.iter().zip(mine);
+            let pressing = pressing.filter_map(|(c, &o)| Some((c, c.footprint?, o)));
+            for (k, (c, f, offset)) in pressing.enumerate() {
+                let mut u = c.uniform.holding(plan.holding);
+                u.noise_seed = plan.uniform.noise_seed;
+                u.lane = frame.lane;
+                u.image_at = frame.image_at;
+                u.counters_at = frame.counters_at;
+                u.field_at = (fields_at + offset / 4) as u32;
+                if rounds.len() <= k {
+                    rounds.push(Vec::new());
+                }
+                rounds[k].push((&*c.press.object, u, f.pressed));
+            }
+        }
+        wave.contacts = rounds
+            .iter()
+            .map(|round| contact_dispatches(binds, round, slots))
+            .collect();
+        let pressed = || {
+            plans
+                .iter()
+                .zip(&placed)
+                .filter(|(p, _)| p.texel_span().is_some())
+        };
+        let meridians: Vec<(FrameUniform, Rect)> = pressed()
+            .flat_map(|(p, &u)| {
+                p.meridians.iter().map(move |&m| {
+                    let mut u = u;
+                    u.meridian_rect = rect4(Some(m));
+                    (u, m)
+                })
+            })
+            .collect();
+        wave.meridians = binds.over(&meridians, slots);
+        let texels: Vec<(FrameUniform, Rect)> = pressed()
+            .flat_map(|(p, &u)| {
+                p.texels.iter().map(move |&t| {
+                    let mut u = u;
+                    u.texel_rect = rect4(Some(t));
+                    (u, t)
+                })
+            })
+            .collect();
+        wave.texels = binds.over(&texels, slots);
+        let listed: Vec<(FrameUniform, Rect)> = plans
+            .iter()
+            .zip(&placed)
+            .filter_map(|(p, &u)| Some((u, p.pixels?)))
+            .collect();
+        if !listed.is_empty() {
+            let uniforms: Vec<FrameUniform> = listed.iter().map(|l| l.0).collect();
+            // Every listed frame is in one group: the indirect dispatches' third dimension is
+            // the wave's listed frames (at most the lanes, at most FRAMES_BOUND).
+            let (k, n) = binds.add(&uniforms, slots, None)[0];
+            let most = listed.iter().map(|&(_, r)| {
+                let (columns, rows) = tiles_over(r);
+                columns.len() as u32 * rows.len() as u32
+            });
+            let tiles = most.max().unwrap_or(0);
+            wave.listed = Some((
+                k,
+                Groups::Direct(groups(tiles, SELECT_TILES_WORKGROUP), 1, n),
+            ));
+        }
+        if self.sensor.config.render.noise.any() {
+            let whole = super::resources::whole_image(&self.sensor);
+            let all: Vec<(FrameUniform, Rect)> = placed.iter().map(|&u| (u, whole)).collect();
+            wave.noise = binds.over(&all, slots);
+        }
+        wave
     }
 
     /// The lane (heightfield) of the frame in `slot`.
@@ -399,118 +521,166 @@ impl Renderer {
         slot as usize % self.lanes
     }
 
-    /// Records the frames' stages, [`Renderer::lanes`] frames (a wave) to a command buffer,
-    /// the waves side by side on rayon's threads (what the CPU does for a frame, recording,
-    /// is then shared by the cores), each wave's errors caught on its own thread.
-    pub(super) fn record_frames(&self, frames: &[FrameWork]) -> Result<Vec<wgpu::CommandBuffer>> {
+    /// Records the waves, a command buffer each, side by side on rayon's threads (what the
+    /// CPU does for a frame, recording, is then shared by the cores), each wave's errors
+    /// caught on its own thread; with the dispatches and copies recorded.
+    fn record_frames(
+        &self,
+        waves: &[Wave],
+        groups: &[wgpu::BindGroup],
+    ) -> Result<(Vec<wgpu::CommandBuffer>, (u64, u64))> {
         let args = &self.resources.dispatch_args;
-        frames
-            .par_chunks(self.lanes)
+        let recorded: Vec<(wgpu::CommandBuffer, (u64, u64))> = waves
+            .par_iter()
             .map(|wave| {
                 let recorded = self.ctx.scoped("recording frames", || {
                     let mut rec = Recorder::new(self.ctx, args);
-                    self.record_wave(&mut rec, wave)?;
-                    Ok(rec.finish().finish())
+                    self.record_wave(&mut rec, wave, groups)?;
+                    let commands = rec.commands();
+                    Ok((rec.finish().finish(), commands))
                 });
                 recorded?
             })
-            .collect()
+            .collect::<Result<_>>()?;
+        let commands = recorded
+            .iter()
+            .fold((0, 0), |(d, c), (_, (d1, c1))| (d + d1, c + c1));
+        Ok((recorded.into_iter().map(|r| r.0).collect(), commands))
     }
 
-    /// Records a wave of frames: each stage of each of them before the next stage, so that
-    /// their dispatches share passes and the copies between stages run together; each
-    /// stage's end marked for a profile.
+    /// Records a wave of frames: each stage one dispatch over all of them (or a few, by
+    /// kind of object or [`FRAMES_BOUND`] at a time), then the copies that stage's readers
+    /// need, one for the wave; each stage's end marked for a profile.
     pub(super) fn record_wave<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
-        wave: &[FrameWork<'a>],
+        wave: &Wave,
+        groups: &'a [wgpu::BindGroup],
     ) -> Result<()> {
         let (res, p) = (&self.resources, &self.pipelines);
-        let pressed = |f: &FrameWork| f.plan.region.is_some();
-        let seen = |f: &FrameWork| f.plan.pixels.is_some();
-        for f in wave {
-            self.record_frame_start(rec.encoder(), f);
+        let hf = &res.heightfield;
+        let batches = |d: &Dispatches| -> Vec<Batch<'a>> {
+            d.iter()
+                .map(|&(k, g)| Batch {
+                    bind: &groups[k],
+                    groups: g,
+                })
+                .collect()
+        };
+        if let Some(span) = wave.span {
+            hf.clear(rec.copies(Map::ALL.len() as u64), span);
         }
-        rec.stage_done(Stage::Start)?;
-        // Each frame's k-th contact, its own penetration copied out before the next.
-        let most = wave.iter().map(|f| f.contacts.len()).max().unwrap_or(0);
-        for k in 0..most {
-            for c in wave.iter().filter_map(|f| f.contacts.get(k)) {
-                p.contact.dispatch(rec, c)?;
+        match &wave.start {
+            Start::Copies(slot, image, holding) => {
+                self.record_frame_start(rec, *slot, *image, *holding)
             }
-            for f in wave {
-                if let Some(c) = f.contacts.get(k) {
-                    let fields = &res.penetration_fields;
-                    f.heightfield
-                        .copy_field(rec.encoder(), c.pressed, fields, c.field_offset);
+            Start::Pass(start) => {
+                for b in batches(start) {
+                    p.start.dispatch(rec, b);
                 }
             }
         }
-        refresh(rec, wave, Map::Penetration);
+        rec.stage_done(Stage::Start)?;
+        let refresh = |rec: &mut Recorder<'a>, map: Map| {
+            if let Some(span) = wave.span {
+                hf.refresh(rec.copies(1), map, span);
+            }
+        };
+        for round in &wave.contacts {
+            for &(kind, k, g) in round {
+                let b = Batch {
+                    bind: &groups[k],
+                    groups: g,
+                };
+                p.contact.dispatch(rec, kind, b)?;
+            }
+        }
+        refresh(rec, Map::Penetration);
         rec.stage_done(Stage::Contact)?;
-        for f in wave.iter().filter(|f| pressed(f)) {
-            p.elastomer.dispatch_meridians(rec, &f.meridians);
-        }
-        refresh(rec, wave, Map::Elastomer);
+        p.elastomer
+            .dispatch_meridians(rec, &batches(&wave.meridians));
+        refresh(rec, Map::Elastomer);
         rec.stage_done(Stage::Meridians)?;
-        for f in wave.iter().filter(|f| pressed(f)) {
-            p.elastomer.dispatch_parallels(rec, &f.texels);
-        }
-        refresh(rec, wave, Map::Height);
+        let texels = batches(&wave.texels);
+        p.elastomer.dispatch_parallels(rec, &texels);
+        refresh(rec, Map::Height);
         rec.stage_done(Stage::Parallels)?;
-        for f in wave.iter().filter(|f| pressed(f)) {
-            p.elastomer.record_normals(rec, &f.texels);
-        }
+        p.elastomer.record_normals(rec, &texels);
         rec.stage_done(Stage::SkinNormals)?;
         // The tile lists join the normals' pass (both read the height map alone); the
         // normals' maps are refreshed after it.
-        for f in wave {
-            if let Some(pixels) = f.plan.pixels {
-                p.touched.record_tiles(rec, pixels, f.frame);
-            }
+        let listed = wave.listed.map(|(k, g)| Batch {
+            bind: &groups[k],
+            groups: g,
+        });
+        if let Some(b) = listed {
+            p.touched.record_tiles(rec, b);
         }
-        refresh(rec, wave, Map::Elastomer);
-        for f in wave.iter().filter(|f| seen(f)) {
-            copy_dispatch_args(rec.encoder(), res, f.plan.slot, TILE_LIST_ARGS);
-        }
-        for f in wave.iter().filter(|f| seen(f)) {
-            p.touched.dispatch_listed(rec, f.plan.slot, f.frame);
+        refresh(rec, Map::Elastomer);
+        if let Some(b) = listed {
+            copy_dispatch_args(rec.copies(1), res, wave.first_slot, TILE_LIST_ARGS);
+            p.touched.dispatch_listed(rec, wave.first_slot, b.bind);
         }
         rec.stage_done(Stage::Select)?;
-        for f in wave.iter().filter(|f| seen(f)) {
-            copy_dispatch_args(rec.encoder(), res, f.plan.slot, TOUCHED_LIST_ARGS);
+        if let Some(b) = listed {
+            copy_dispatch_args(rec.copies(1), res, wave.first_slot, TOUCHED_LIST_ARGS);
+            p.camera.dispatch_touched(rec, wave.first_slot, b.bind);
         }
-        for f in wave.iter().filter(|f| seen(f)) {
-            p.camera.dispatch_touched(rec, f.plan.slot, f.frame);
-        }
-        if self.sensor.config.render.noise.any() {
-            let size = (self.sensor.width, self.sensor.height);
-            for f in wave {
-                p.leds.record_noise(rec, f.frame, size);
-            }
+        for b in batches(&wave.noise) {
+            p.leds.record_noise(rec, b);
         }
         rec.stage_done(Stage::Touched)?;
         Ok(())
     }
 
-    /// A frame's start: its image buffers hold its rect of the image, the reference's
-    /// pixels there and zero indentation; its counters are zero (the touched list itself
-    /// needs no clearing: only the places its counts hold are read); and the heightfield is
-    /// zero over its region.
-    fn record_frame_start(&self, encoder: &mut wgpu::CommandEncoder, frame: &FrameWork) {
-        let (res, plan) = (&self.resources, frame.plan);
-        if let Some(r) = plan.holding {
-            let offset = plan.slot * res.slot_bytes;
+    /// A frame's start, for a frame alone: as the start pass, its image buffers hold its
+    /// rect of the image, the reference's pixels there and zero indentation, and its
+    /// counters are zero.
+    fn record_frame_start(
+        &self,
+        rec: &mut Recorder,
+        slot: u64,
+        offset: u64,
+        holding: Option<Rect>,
+    ) {
+        let res = &self.resources;
+        if let Some(r) = holding {
+            let encoder = rec.copies(2);
             res.copy_reference(encoder, offset, r);
             encoder.clear_buffer(&res.indentation, offset, Some(held_bytes(r)));
         }
-        encoder.clear_buffer(
-            &res.counters,
-            plan.slot * res.counter_bytes,
-            Some(COUNTER_HEADER_BYTES),
-        );
-        if let Some(region) = plan.region {
-            frame.heightfield.clear(encoder, Some(region));
+        let counters = slot * res.counter_bytes;
+        let encoder = rec.copies(1);
+        encoder.clear_buffer(&res.counters, counters, Some(COUNTER_HEADER_BYTES));
+    }
+}
+
+/// A round's contact dispatches: one for each kind of object (a pipeline each) and loaded
+/// mesh (an SDF grid each), sized by its largest pressed rect.
+fn contact_dispatches<'c>(
+    binds: &mut Binds<'c>,
+    round: &[(&'c Object, FrameUniform, Rect)],
+    slots: WaveRange,
+) -> Vec<(u32, usize, Groups)> {
+    let key = |(o, u, _): &(&Object, FrameUniform, Rect)| {
+        let mesh = matches!(o, Object::Mesh { .. }).then_some(*o as *const Object as usize);
+        (u.object_kind, mesh)
+    };
+    let mut out = Vec::new();
+    let mut done = Vec::new();
+    for item in round {
+        let k = key(item);
+        if done.contains(&k) {
+            continue;
+        }
+        done.push(k);
+        let alike: Vec<_> = round.iter().filter(|i| key(i) == k).collect();
+        let uniforms: Vec<FrameUniform> = alike.iter().map(|i| i.1).collect();
+        let mut rects = alike.iter().map(|i| i.2);
+        for (group, n) in binds.add(&uniforms, slots, Some(item.0)) {
+            let g = over_largest(rects.by_ref().take(n as usize), 0, n);
+            out.push((k.0, group, g));
         }
     }
+    out
 }

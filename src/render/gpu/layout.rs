@@ -27,7 +27,7 @@ wgsl_constants! {
     SHALLOW_DISPATCH = 4;
     DEEP_DISPATCH = 8;
     SELECT_DISPATCH = 12;
-    /// Word where the touched list starts (the counters before it are read back).
+    /// Words of a frame's counters (cleared and read back; its lists are elsewhere).
     TOUCHED_LIST = 64;
     /// Invocations per workgroup of the camera's passes over the touched list.
     TOUCHED_WORKGROUP = 64;
@@ -39,7 +39,7 @@ wgsl_constants! {
     PIXEL_TILE = 8;
 }
 
-/// Bytes of a frame's counters before the touched list: what is cleared and read back.
+/// Bytes of a frame's counters: what is cleared and read back.
 pub const COUNTER_HEADER_BYTES: u64 = TOUCHED_LIST as u64 * 4;
 
 /// Bytes per pixel of the rays' probes.
@@ -76,6 +76,7 @@ pub const LIST_WORKGROUP: u32 = 64;
 /// The workgroup size of every compute entry point: `(stage, entry point, size)`. The
 /// renderer sizes its direct dispatches by these; the indirect ones are sized on the GPU.
 pub const WORKGROUP_SIZES: &[(&str, &str, [u32; 3])] = &[
+    ("start", "frame_start", [WORKGROUP, WORKGROUP, 1]),
     ("contact", "contact", [WORKGROUP, WORKGROUP, 1]),
     ("elastomer", "blend_meridian", [WORKGROUP, WORKGROUP, 1]),
     ("elastomer", "blend_azimuth", [WORKGROUP, WORKGROUP, 1]),

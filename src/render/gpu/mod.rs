@@ -4,9 +4,10 @@
 //! probes read a displaced texel are listed, of those the pixels whose rays the deformation
 //! reaches, and the camera casts and shades that list alone, sized on the GPU (indirect
 //! dispatch). The frames of a submission ([`Renderer::batch_frames`]) are recorded in waves
-//! of [`Renderer::lanes`] frames, stage by stage, each into its own slice of the output
-//! buffers and on its own heightfield, and read back together; the next submission's frames
-//! are prepared on the CPU meanwhile.
+//! of [`Renderer::lanes`] frames, each stage one dispatch over the whole wave (the frame the
+//! third coordinate of its workgroups), each frame into its own slice of the output buffers
+//! and on its own heightfield, and read back together; the next submission's frames are
+//! prepared on the CPU meanwhile.
 //!
 //! - `resources.rs` and `pipelines.rs`: everything the renderer binds and runs, made in one
 //!   place; [`bindings`]: the one table of bindings; [`layout`]: where the shaders put
@@ -60,9 +61,10 @@ pub fn default_batch(adapter: &wgpu::AdapterInfo) -> usize {
 /// Frames of a submission whose stages are recorded side by side unless told otherwise
 /// ([`Renderer::set_lanes`]): one on a software device, where the frames' work runs on the
 /// same cores either way; on a GPU, where one frame's stage is too little work to fill it
-/// and each pass and copy between stages costs its own fixed time, a batch's worth, as many
-/// as [`LANES_BYTES`] of heightfields hold (a lane's heightfield of `texels` per side takes
-/// 48 bytes a texel, its buffers and maps).
+/// and each dispatch and copy costs its own fixed time (a barrier), a batch's worth, as
+/// many as [`LANES_BYTES`] of heightfields hold (a lane's heightfield of `texels` per side
+/// takes 48 bytes a texel, its buffers and maps). The renderer takes fewer where the
+/// device cannot bind that many at once.
 pub fn default_lanes(adapter: &wgpu::AdapterInfo, texels: u32) -> usize {
     let lane_bytes = 48 * texels as u64 * texels as u64;
     match adapter.device_type {
@@ -97,6 +99,11 @@ pub struct Timings {
     /// Tiles of 8 x 8 pixels whose pixels the touched lists were chosen from (the tile
     /// lists' lengths), summed.
     pub listed_tiles: u64,
+    /// Commands recorded: compute dispatches, and copies and clears (wgpu puts a barrier
+    /// before each that writes), then the copies that read the frames back, summed.
+    pub dispatches: u64,
+    pub copies: u64,
+    pub readback_copies: u64,
 }
 
 impl Timings {
@@ -108,6 +115,9 @@ impl Timings {
         self.record += other.record;
         self.touched_pixels += other.touched_pixels;
         self.listed_tiles += other.listed_tiles;
+        self.dispatches += other.dispatches;
+        self.copies += other.copies;
+        self.readback_copies += other.readback_copies;
     }
 }
 
@@ -143,7 +153,8 @@ impl Renderer {
     pub fn on(sensor: &Sensor, ctx: &'static GpuContext) -> Result<Renderer> {
         let grid = HeightfieldGrid::for_sensor(sensor);
         let batch = default_batch(&ctx.adapter_info);
-        let lanes = default_lanes(&ctx.adapter_info, grid.texels);
+        let lanes = default_lanes(&ctx.adapter_info, grid.texels)
+            .min(resources::max_lanes(ctx, sensor, &grid));
         let mut resources = Resources::new(ctx, sensor, &grid, batch)?;
         resources.reserve_lanes(ctx, lanes);
         let constants = SensorUniform::new(sensor, &grid).pipeline_constants();
@@ -202,18 +213,26 @@ impl Renderer {
         self.lanes
     }
 
-    /// Records the stages of `lanes` frames (1 to [`MAX_BATCH`]) side by side from now on:
-    /// each stage of each of them before the next stage, each frame on a heightfield of its
-    /// own (`lanes` heightfields held). The frames are the same whatever it is.
+    /// Records the stages of `lanes` frames (1 to [`MAX_BATCH`], and as many as the device
+    /// binds at once) side by side from now on: each stage of all of them in one dispatch,
+    /// each frame on a heightfield of its own (`lanes` heightfields held). The frames are the
+    /// same whatever it is.
     pub fn set_lanes(&mut self, lanes: usize) -> Result<()> {
-        if !(1..=MAX_BATCH).contains(&lanes) {
+        let most = resources::max_lanes(self.ctx, &self.sensor, &self.grid);
+        if !(1..=MAX_BATCH.min(most)).contains(&lanes) {
             return Err(GeltipError::input(
                 "lanes",
-                format!("{lanes} frames side by side; 1 to {MAX_BATCH}"),
+                format!(
+                    "{lanes} frames side by side; 1 to {} on this device",
+                    MAX_BATCH.min(most)
+                ),
             ));
         }
-        self.resources.reserve_lanes(self.ctx, lanes);
-        self.dirty.resize(lanes.max(self.dirty.len()), None);
+        if lanes > self.resources.heightfield.lanes() as usize {
+            self.resources.reserve_lanes(self.ctx, lanes);
+            // A new heightfield is zero everywhere.
+            self.dirty = vec![None; lanes];
+        }
         self.lanes = lanes;
         Ok(())
     }
@@ -430,12 +449,15 @@ impl Renderer {
         pixel_rect.filter(|r| r.w > 0 && r.h > 0)
     }
 
+    /// A buffer of frame uniform `u` alone, bound as a dispatch's frames (the first).
     fn uniform_buffer(&self, u: &FrameUniform) -> wgpu::Buffer {
+        let mut contents = vec![0u8; bindings::FRAMES_BOUND_BYTES as usize];
+        contents[..std::mem::size_of::<FrameUniform>()].copy_from_slice(bytemuck::bytes_of(u));
         self.ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("geltip frame uniform"),
-                contents: bytemuck::bytes_of(u),
+                contents: &contents,
                 usage: wgpu::BufferUsages::UNIFORM,
             })
     }
@@ -444,7 +466,7 @@ impl Renderer {
     /// never have run, or run in part): the next frame clears all of it.
     fn forget_heightfield_on_error<T>(&mut self, result: Result<T>) -> Result<T> {
         if result.is_err() {
-            let whole = self.resources.heightfields[0].whole();
+            let whole = self.resources.heightfield.whole();
             self.dirty.iter_mut().for_each(|d| *d = Some(whole));
         }
         result

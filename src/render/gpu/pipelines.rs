@@ -8,6 +8,11 @@ use crate::gpu::shaders::create_compute_pipeline_with;
 use crate::gpu::GpuContext;
 use std::collections::HashMap;
 
+/// A frame's start: its image buffers from the reference, its counters cleared.
+pub(super) struct StartPipelines {
+    pub frame_start: wgpu::ComputePipeline,
+}
+
 /// Stage 1: one pipeline per object kind (FrameUniform `object_kind`), which is a pipeline
 /// constant of `shaders/contact.wgsl`.
 pub(super) struct ContactPipelines(HashMap<u32, wgpu::ComputePipeline>);
@@ -40,6 +45,7 @@ pub(super) struct LedsPipelines {
 }
 
 pub(super) struct Pipelines {
+    pub start: StartPipelines,
     pub contact: ContactPipelines,
     pub elastomer: ElastomerPipelines,
     pub touched: TouchedPipelines,
@@ -62,6 +68,9 @@ impl Pipelines {
             create_compute_pipeline_with(ctx, stage, entry, Some(layout), &constants)
         };
         Ok(Pipelines {
+            start: StartPipelines {
+                frame_start: p("start", "frame_start")?,
+            },
             contact: ContactPipelines(HashMap::new()),
             elastomer: ElastomerPipelines {
                 meridians: p("elastomer", "blend_meridian")?,

@@ -32,19 +32,14 @@ impl Renderer {
     }
 
     fn profile_frame(&mut self, contacts: &[Prepared]) -> Result<Vec<(&'static str, Duration)>> {
-        let offsets = self.field_offsets(&contacts.iter().collect::<Vec<_>>());
+        let offsets = self.field_offsets(&contacts.iter().collect::<Vec<_>>())?;
         let plan = self.plan(0, contacts, 0);
-        let (groups, binds) = self.bind_frames(std::slice::from_ref(&plan), [contacts].into_iter());
-        let mut rec = Recorder::profiling(self.ctx, &self.resources.dispatch_args);
         let plans = std::slice::from_ref(&plan);
-        let work = self.frame_work(
-            plans,
-            [contacts].into_iter(),
-            &binds,
-            &groups.groups,
-            &offsets,
-        );
-        self.record_wave(&mut rec, &work)?;
+        let (groups, waves) = self.waves(plans, &[contacts], &offsets);
+        let mut rec = Recorder::profiling(self.ctx, &self.resources.dispatch_args);
+        if let Some(wave) = waves.first() {
+            self.record_wave(&mut rec, wave, &groups)?;
+        }
         let mut out: Vec<(&'static str, Duration)> = rec
             .finish_profile()?
             .into_iter()

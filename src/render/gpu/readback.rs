@@ -1,9 +1,12 @@
 //! Reading frames back: the copies ride in the submission of the work they read, so a
 //! submission costs one round trip, and each frame's image and indentation are read over
-//! the rect its buffers hold (the reference's pixels and zero indentation elsewhere).
+//! the rect its buffers hold (the reference's pixels and zero indentation elsewhere). The
+//! frames' rects, a wave's counters and the contacts' fields each lie packed, so the copies
+//! are a few a submission, not a few a frame.
 
+use super::bindings::packed_offsets;
 use super::layout::COUNTER_HEADER_BYTES;
-use super::resources::held_bytes;
+use super::resources::{held_bytes, Map};
 use super::Renderer;
 use crate::error::{GeltipError, Result};
 use crate::gpu::readback::{map_ranges, read_buffer, record_ranges, staging_bytes, unpadded_rows};
@@ -28,14 +31,16 @@ pub(super) struct ReadFrames {
     pub mapped: Instant,
     /// When the work was submitted.
     pub submitted: Instant,
+    /// The copies that read the frames back.
+    pub copies: u64,
 }
 
 impl Renderer {
     /// Submits `encoder` (the work that renders frames `0..rects.len()` of a submission)
     /// with the copies that read them back appended, waits once and unpacks: per frame, its
     /// image and indentation (read over its rect, which its buffers hold) and its counters;
-    /// then the contacts' penetration fields over `fields` (byte ranges of the penetration
-    /// fields; an empty field for `None`).
+    /// then the contacts' penetration fields over `fields` (byte ranges among the contacts'
+    /// fields, packed in order after the lanes' heights; an empty field for `None`).
     pub(super) fn read_frames(
         &mut self,
         what: &str,
@@ -57,6 +62,7 @@ impl Renderer {
         let total = staging_bytes(&self.frame_ranges(rects, fields))?;
         self.resources.reserve_staging(self.ctx, total);
         let ranges = self.frame_ranges(rects, fields);
+        let copies = ranges.iter().filter(|r| r.2 > 0).count() as u64;
         let staging = &self.resources.staging;
         record_ranges(&mut encoder, staging, &ranges)?;
         let submission = self.ctx.submit(what, encoder)?;
@@ -73,31 +79,40 @@ impl Renderer {
                 counters: Vec::new(),
             })
             .collect();
-        let frame_ranges = 3 * rects.len();
+        let (offsets, _) = packed_offsets(rects);
         let (mapped, read_fields) = map_ranges(self.ctx, staging, &ranges, submission, |all| {
             let mapped = Instant::now();
-            let (parts, fields) = all.split_at(frame_ranges);
+            let waves = rects.len().div_ceil(self.lanes);
+            let (images, indentations, all_fields) = (all[0], all[1], all[2 + waves]);
+            let counters: Vec<&[u8]> = all[2..2 + waves]
+                .iter()
+                .flat_map(|w| w.chunks(COUNTER_HEADER_BYTES as usize))
+                .collect();
             frames
                 .par_iter_mut()
-                .zip(parts.par_chunks(3))
-                .zip(rects)
-                .for_each(|((frame, part), rect)| {
+                .zip(counters)
+                .zip(rects.par_iter().zip(&offsets))
+                .for_each(|((frame, counters), (rect, &at))| {
                     if let Some(r) = *rect {
+                        let held = at as usize..(at + held_bytes(r)) as usize;
                         let rgba = bytemuck::cast_slice_mut::<u8, [u8; 4]>(&mut frame.rgba);
-                        paste_rows(rgba, width, r, part[0], |b| b);
+                        paste_rows(rgba, width, r, &images[held.clone()], |b| b);
                         paste_rows(
                             &mut frame.indentation,
                             width,
                             r,
-                            part[1],
+                            &indentations[held],
                             f32::from_ne_bytes,
                         );
                     }
-                    frame.counters = bytemuck::pod_collect_to_vec(part[2]);
+                    frame.counters = bytemuck::pod_collect_to_vec(counters);
                 });
             let fields: Vec<Vec<f32>> = fields
                 .par_iter()
-                .map(|b| bytemuck::pod_collect_to_vec(b))
+                .map(|f| {
+                    let (at, bytes) = f.unwrap_or((0, 0));
+                    bytemuck::pod_collect_to_vec(&all_fields[at as usize..(at + bytes) as usize])
+                })
                 .collect();
             (mapped, fields)
         })?;
@@ -106,28 +121,33 @@ impl Renderer {
             fields: read_fields,
             mapped,
             submitted,
+            copies,
         })
     }
 
-    /// What [`Self::read_frames`] reads: per frame, its image's and indentation's rect and
-    /// its counters; then the fields.
+    /// What [`Self::read_frames`] reads: the frames' images and indentations (their rects,
+    /// packed in order: [`packed_offsets`]), a copy each; each frame's counters; and the
+    /// contacts' fields, packed in order in the height buffer, in one copy.
     fn frame_ranges(
         &self,
         rects: &[Option<Rect>],
         fields: &[Option<(u64, u64)>],
     ) -> Vec<(&wgpu::Buffer, u64, u64)> {
         let res = &self.resources;
-        let mut ranges = Vec::with_capacity(3 * rects.len() + fields.len());
-        for (k, rect) in (0..).zip(rects) {
-            let slot = k * res.slot_bytes;
-            let bytes = rect.map_or(0, held_bytes);
-            ranges.push((&res.image, slot, bytes));
-            ranges.push((&res.indentation, slot, bytes));
-            ranges.push((&res.counters, k * res.counter_bytes, COUNTER_HEADER_BYTES));
+        let (_, held) = packed_offsets(rects);
+        let mut ranges = Vec::with_capacity(3 + rects.len());
+        ranges.push((&res.image, 0, held));
+        ranges.push((&res.indentation, 0, held));
+        // A wave's frames' counters lie side by side from its first slot's place.
+        for first in (0..rects.len()).step_by(self.lanes) {
+            let frames = (rects.len() - first).min(self.lanes) as u64;
+            let at = first as u64 * res.counter_bytes;
+            ranges.push((&res.counters, at, frames * COUNTER_HEADER_BYTES));
         }
-        for &(offset, bytes) in fields.iter().map(|f| f.as_ref().unwrap_or(&(0, 0))) {
-            ranges.push((&res.penetration_fields, offset, bytes));
-        }
+        let height = res.heightfield.buffer(Map::Height);
+        let fields_at = res.heightfield.fields_at() * 4;
+        let end = fields.iter().flatten().map(|&(at, bytes)| at + bytes).max();
+        ranges.push((height, fields_at, end.unwrap_or(0)));
         ranges
     }
 

@@ -12,19 +12,20 @@ use std::time::{Duration, Instant};
 /// the dispatch buffer.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum Groups {
-    Direct(u32, u32),
+    Direct(u32, u32, u32),
     Indirect(u64),
 }
 
 impl Groups {
-    /// One invocation a texel or pixel of `r`, in [`WORKGROUP`]-square workgroups.
+    /// One invocation a texel or pixel of `r`, in [`WORKGROUP`]-square workgroups, of one
+    /// frame.
     pub fn over(r: Rect) -> Groups {
-        Groups::Direct(groups(r.w, WORKGROUP), groups(r.h, WORKGROUP))
+        Groups::Direct(groups(r.w, WORKGROUP), groups(r.h, WORKGROUP), 1)
     }
 
     /// Whether the dispatch runs any workgroup (an indirect one may still run none).
     fn works(self) -> bool {
-        !matches!(self, Groups::Direct(x, y) if x == 0 || y == 0)
+        !matches!(self, Groups::Direct(x, y, z) if x == 0 || y == 0 || z == 0)
     }
 }
 
@@ -88,6 +89,9 @@ pub(super) struct Recorder<'a> {
     pass: Vec<(&'a wgpu::ComputePipeline, &'a wgpu::BindGroup, Groups)>,
     dispatch_args: &'a wgpu::Buffer,
     clock: Option<Clock>,
+    /// Dispatches and copies (or clears) recorded.
+    dispatches: u64,
+    copies: u64,
 }
 
 impl<'a> Recorder<'a> {
@@ -99,6 +103,8 @@ impl<'a> Recorder<'a> {
             pass: Vec::new(),
             dispatch_args,
             clock: None,
+            dispatches: 0,
+            copies: 0,
         }
     }
 
@@ -130,8 +136,21 @@ impl<'a> Recorder<'a> {
         groups: Groups,
     ) {
         if groups.works() {
+            self.dispatches += 1;
             self.pass.push((pipeline, bind, groups));
         }
+    }
+
+    /// The encoder, for `n` copies and clears (counted): the pending pass is recorded
+    /// first.
+    pub fn copies(&mut self, n: u64) -> &mut wgpu::CommandEncoder {
+        self.copies += n;
+        self.encoder()
+    }
+
+    /// Dispatches and copies recorded so far.
+    pub fn commands(&self) -> (u64, u64) {
+        (self.dispatches, self.copies)
     }
 
     /// The encoder, for copies and clears: the pending pass is recorded first.
@@ -154,7 +173,7 @@ impl<'a> Recorder<'a> {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind, &[]);
             match groups {
-                Groups::Direct(x, y) => pass.dispatch_workgroups(x, y, 1),
+                Groups::Direct(x, y, z) => pass.dispatch_workgroups(x, y, z),
                 Groups::Indirect(offset) => {
                     pass.dispatch_workgroups_indirect(self.dispatch_args, offset)
                 }

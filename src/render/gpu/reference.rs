@@ -1,7 +1,7 @@
 //! The empty finger: every pixel ray-cast once per renderer, which also leaves each ray's
 //! probes and each tile's texel ranges for the contact frames after it.
 
-use super::bindings::FrameBinding;
+use super::bindings::{FrameBinding, WaveRange};
 use super::record::Recorder;
 use super::resources::{extent, whole_image, Map};
 use super::{Renderer, Timings};
@@ -15,7 +15,8 @@ impl Renderer {
     pub fn render_reference(&mut self) -> Result<()> {
         let rendered = self.record_reference();
         self.forget_heightfield_on_error(rendered)?;
-        self.dirty[0] = None;
+        // Every lane was cleared.
+        self.dirty.iter_mut().for_each(|d| *d = None);
         let start = Instant::now();
         let rgba = self.read_whole_image()?;
         let (w, h) = (self.sensor.width, self.sensor.height);
@@ -28,7 +29,7 @@ impl Renderer {
             readback: start.elapsed(),
             record: Duration::ZERO,
             touched_pixels: (w * h) as u64,
-            listed_tiles: 0,
+            ..Timings::default()
         };
         Ok(())
     }
@@ -43,16 +44,21 @@ impl Renderer {
         let binding = FrameBinding {
             uniform: &uniform,
             uniform_offset: 0,
-            slot: 0,
-            lane: 0,
+            wave: WaveRange {
+                first_slot: 0,
+                slots: 1,
+                image_offset: 0,
+                image_bytes: res.slot_bytes,
+            },
             grid: &res.empty_grid,
         };
         let bind = res.bind_group(&self.ctx.device, binding);
         let whole = whole_image(&self.sensor);
         let mut rec = Recorder::new(self.ctx, &res.dispatch_args);
-        res.heightfields[0].clear(rec.encoder(), None);
+        let everything = res.heightfield.everything();
+        res.heightfield.clear(rec.encoder(), everything);
         for map in Map::ALL {
-            res.heightfields[0].refresh(rec.encoder(), map, None);
+            res.heightfield.refresh(rec.encoder(), map, everything);
         }
         p.camera.record_reference(&mut rec, &bind, whole);
         p.touched

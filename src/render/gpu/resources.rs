@@ -1,7 +1,7 @@
 //! Every buffer, texture and sampler the renderer uses, and its bind group layout, made in
 //! one place ([`Resources::new`]) once the device is known to hold them.
 
-use super::bindings::layout_entries;
+use super::bindings::{layout_entries, FRAMES_BOUND_BYTES};
 use super::layout::{
     COUNTER_HEADER_BYTES, DISPATCH_ARGS_BYTES, PROBES_BYTES_PER_PIXEL, PROBE_TILE_BYTES,
 };
@@ -23,9 +23,10 @@ pub(super) struct Resources {
     pub layout: wgpu::BindGroupLayout,
     pub pipeline_layout: wgpu::PipelineLayout,
     pub sensor: wgpu::Buffer,
-    /// A heightfield per lane: the frames of a submission whose stages are recorded side by
-    /// side each work on their own ([`super::Renderer::set_lanes`]).
-    pub heightfields: Vec<Heightfield>,
+    /// A heightfield per lane, in one set of buffers and map arrays: the frames of a
+    /// submission whose stages are recorded side by side each work on their own
+    /// ([`super::Renderer::set_lanes`]), and each stage runs over all of them at once.
+    pub heightfield: Heightfield,
     /// Per pixel, where its ray crosses the shell (written by the reference frame); then
     /// per tile of pixels, the texels those crossings read (`probe_tiles_of_rays`).
     pub probes: wgpu::Buffer,
@@ -33,19 +34,19 @@ pub(super) struct Resources {
     pub probe_map: MapTexture,
     /// Nearest, clamped: the maps' textureGather (see `shaders/shared/common.wgsl`).
     pub map_sampler: wgpu::Sampler,
-    /// Each frame of a submission's image and indentation, in slices of `slot_bytes`.
+    /// The image and indentation of each frame of a submission over the rect it holds,
+    /// packed in order ([`super::bindings::packed_offsets`]; `slot_bytes` a frame at most).
     pub image: wgpu::Buffer,
     pub indentation: wgpu::Buffer,
-    /// Each frame's counters and touched list, in slices of `counter_bytes`.
+    /// The frames' counters and lists, `counter_bytes` a frame: a wave's from its first
+    /// frame's slot on, their counters side by side and their lists after them.
     pub counters: wgpu::Buffer,
-    /// Per frame, the indirect dispatches' arguments, copied from `counters`
-    /// ([`super::layout::dispatch_args_at`]).
+    /// Per wave, at its first frame's slot, the indirect dispatches' arguments, copied from
+    /// `counters` ([`super::layout::dispatch_args_at`]).
     pub dispatch_args: wgpu::Buffer,
-    /// Each contact's own penetration over its pressed rect's rows, copied out of `height`
-    /// right after its contact pass (its labels come from it: see `contact.wgsl`).
-    pub penetration_fields: wgpu::Buffer,
     /// The empty finger's image, from which a frame copies the rect it can change.
     pub reference_texture: wgpu::Texture,
+    pub reference_view: wgpu::TextureView,
     /// Kept for reading a submission back (its images, indentation rows and counters),
     /// grown to the largest submission read so far.
     pub staging: wgpu::Buffer,
@@ -66,11 +67,24 @@ pub(super) struct Resources {
 }
 
 /// The heightfield's three buffers, which the stages write, and their maps, which the
-/// samplers read (see `shaders/shared/common.wgsl` for why both).
+/// samplers read (see `shaders/shared/common.wgsl` for why both): `lanes` heightfields, a
+/// lane's texels after the lane before's in the buffers and a layer each in the maps. After
+/// the lanes' heights, the height buffer holds the contacts' own penetration fields
+/// ([`Self::fields_at`]).
 pub(super) struct Heightfield {
     buffers: [wgpu::Buffer; 3],
     maps: [MapTexture; 3],
     texels: u32,
+    lanes: u32,
+}
+
+/// Lanes of the heightfield, from the first to the last, over the texels of `rect`: what a
+/// wave of frames clears and refreshes at once.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct LaneSpan {
+    pub first: u32,
+    pub last: u32,
+    pub rect: Rect,
 }
 
 /// A texture copy of a buffer the shaders sample, and the bytes per texel of both.
@@ -96,21 +110,6 @@ impl Map {
 /// rows, [`image_pitch`] pixels apart.
 pub(super) fn held_bytes(r: Rect) -> u64 {
     r.h as u64 * image_pitch(r.w) as u64 * 4
-}
-
-/// Where a copy to or from `texture` starts for `rect`: its corner (the copy's extent is the
-/// rect's size).
-pub(super) fn rect_of(texture: &wgpu::Texture, rect: Rect) -> wgpu::TexelCopyTextureInfo<'_> {
-    wgpu::TexelCopyTextureInfo {
-        texture,
-        mip_level: 0,
-        origin: wgpu::Origin3d {
-            x: rect.x,
-            y: rect.y,
-            z: 0,
-        },
-        aspect: wgpu::TextureAspect::All,
-    }
 }
 
 /// The size of `rect` as a copy's extent.
@@ -139,20 +138,24 @@ pub(super) fn storage(
     })
 }
 
-/// A buffer for `count` frame uniforms, [`UNIFORM_STRIDE`] bytes apart.
-fn uniforms(ctx: &GpuContext, count: u64) -> wgpu::Buffer {
+/// A buffer for `count` frame uniforms, [`UNIFORM_STRIDE`] bytes apart, bound from any of
+/// them ([`FRAMES_BOUND_BYTES`] a binding).
+pub(super) fn uniforms(ctx: &GpuContext, count: u64) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("geltip frame uniforms"),
-        size: count.max(1) * UNIFORM_STRIDE,
+        size: count * UNIFORM_STRIDE + FRAMES_BOUND_BYTES,
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
 }
 
+/// A map of `width` x `height` texels; with `layers`, an array of that many (viewed as an
+/// array even of one).
 fn map_texture(
     ctx: &GpuContext,
     label: &str,
     (width, height): (u32, u32),
+    layers: Option<u32>,
     format: wgpu::TextureFormat,
 ) -> MapTexture {
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -160,7 +163,7 @@ fn map_texture(
         size: wgpu::Extent3d {
             width,
             height,
-            depth_or_array_layers: 1,
+            depth_or_array_layers: layers.unwrap_or(1),
         },
         mip_level_count: 1,
         sample_count: 1,
@@ -169,7 +172,14 @@ fn map_texture(
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
-    let view = texture.create_view(&Default::default());
+    let dimension = match layers {
+        Some(_) => wgpu::TextureViewDimension::D2Array,
+        None => wgpu::TextureViewDimension::D2,
+    };
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(dimension),
+        ..Default::default()
+    });
     MapTexture {
         texture,
         view,
@@ -198,6 +208,12 @@ fn check_device(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> Re
         )));
     }
     let limits = ctx.device.limits();
+    if limits.max_uniform_buffer_binding_size < FRAMES_BOUND_BYTES {
+        return Err(GeltipError::Gpu(format!(
+            "adapter {} binds {} bytes of uniforms at most; the renderer needs {FRAMES_BOUND_BYTES}",
+            ctx.adapter_info.name, limits.max_uniform_buffer_binding_size
+        )));
+    }
     let allowed = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
@@ -262,6 +278,29 @@ pub(super) fn check_frames(ctx: &GpuContext, sensor: &Sensor, frames: usize) -> 
 /// device allows.
 pub(super) const UNIFORM_STRIDE: u64 = 256;
 
+/// Lanes (frames recorded side by side, [`super::Renderer::set_lanes`]) the device can bind
+/// at once for `sensor` and `grid`: every stage binds every lane's heightfield, and the
+/// image, indentation and counters of a wave's frames, within one binding each.
+pub(super) fn max_lanes(ctx: &GpuContext, sensor: &Sensor, grid: &HeightfieldGrid) -> usize {
+    let limits = ctx.device.limits();
+    let allowed = limits.max_storage_buffer_binding_size;
+    let slot_bytes = held_bytes(whole_image(sensor));
+    let pixels = sensor.width as u64 * sensor.height as u64;
+    let elastomer = grid.texels as u64 * grid.texels as u64 * 16;
+    let per_lane = slot_bytes.max(counter_bytes(sensor, pixels)).max(elastomer);
+    (allowed / per_lane)
+        .min(limits.max_texture_array_layers as u64)
+        .clamp(1, super::MAX_BATCH as u64) as usize
+}
+
+/// Bytes of one frame's slice of the counters buffer: the counters, the touched list (a
+/// pixel each) and the tile list (a tile each).
+fn counter_bytes(sensor: &Sensor, pixels: u64) -> u64 {
+    let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
+    let tiles = tiles_x as u64 * tiles_y as u64;
+    (COUNTER_HEADER_BYTES + pixels * 4 + tiles * 4).next_multiple_of(256)
+}
+
 /// Every pixel of `sensor`'s image, as a rect.
 pub(super) fn whole_image(sensor: &Sensor) -> Rect {
     Rect {
@@ -286,11 +325,8 @@ impl Resources {
         check_frames(ctx, sensor, frames)?;
         let texels = grid.texels as u64 * grid.texels as u64;
         let slot_bytes = held_bytes(whole_image(sensor));
-        let (tiles_x, tiles_y) = tile_grid(sensor.width, sensor.height);
-        let tiles = tiles_x as u64 * tiles_y as u64;
         let pixels = sensor.width as u64 * sensor.height as u64;
-        // The counters, the touched list (a pixel each) and the tile list (a tile each).
-        let counter_bytes = (COUNTER_HEADER_BYTES + pixels * 4 + tiles * 4).next_multiple_of(256);
+        let counter_bytes = counter_bytes(sensor, pixels);
         let (layout, pipeline_layout) = ctx.scoped("creating the renderer's layout", || {
             let layout = ctx
                 .device
@@ -309,6 +345,19 @@ impl Resources {
         })?;
         let none = wgpu::BufferUsages::empty();
         let batch = frames as u64;
+        let reference_texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("geltip reference texture"),
+            size: extent(whole_image(sensor)),
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Uint,
+            usage: wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let reference_view = reference_texture.create_view(&Default::default());
         Ok(Resources {
             layout,
             pipeline_layout,
@@ -319,12 +368,13 @@ impl Resources {
                     contents: bytemuck::bytes_of(&SensorUniform::new(sensor, grid)),
                     usage: wgpu::BufferUsages::UNIFORM,
                 }),
-            heightfields: vec![Heightfield::new(ctx, grid.texels)],
+            heightfield: Heightfield::new(ctx, grid.texels, 1, 0),
             probes: storage(ctx, "geltip ray probes", probes_bytes(sensor), none),
             probe_map: map_texture(
                 ctx,
                 "geltip ray probes map",
                 (2 * sensor.width, sensor.height),
+                None,
                 wgpu::TextureFormat::Rgba32Float,
             ),
             map_sampler: ctx.device.create_sampler(&wgpu::SamplerDescriptor {
@@ -345,22 +395,8 @@ impl Resources {
                 usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
-            penetration_fields: storage(
-                ctx,
-                "geltip contact penetration fields",
-                texels * 4 * batch,
-                none,
-            ),
-            reference_texture: ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("geltip reference texture"),
-                size: extent(whole_image(sensor)),
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::R32Uint,
-                usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            }),
+            reference_texture,
+            reference_view,
             staging: ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("geltip batch readback"),
                 size: (2 * slot_bytes + COUNTER_HEADER_BYTES + texels * 4) * batch.min(8),
@@ -380,7 +416,16 @@ impl Resources {
     /// [`image_pitch`] apart: a frame's buffers' layout for that rect.
     pub fn copy_reference(&self, encoder: &mut wgpu::CommandEncoder, offset: u64, r: Rect) {
         encoder.copy_texture_to_buffer(
-            rect_of(&self.reference_texture, r),
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.reference_texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: r.x,
+                    y: r.y,
+                    z: 0,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
             wgpu::TexelCopyBufferInfo {
                 buffer: &self.image,
                 layout: wgpu::TexelCopyBufferLayout {
@@ -418,11 +463,14 @@ impl Resources {
         self.frames = frames;
     }
 
-    /// Makes `heightfields` hold at least `lanes` (new ones are zero, as wgpu makes them).
+    /// Makes the heightfield hold at least `lanes` lanes; a new one is zero everywhere (as
+    /// wgpu makes it), the contacts' fields kept as large.
     pub fn reserve_lanes(&mut self, ctx: &GpuContext, lanes: usize) {
-        let texels = self.heightfields[0].texels;
-        while self.heightfields.len() < lanes {
-            self.heightfields.push(Heightfield::new(ctx, texels));
+        let h = &self.heightfield;
+        if (lanes as u32) > h.lanes {
+            let lanes_bytes = h.lane_bytes(Map::Height) * h.lanes as u64;
+            let fields = h.buffer(Map::Height).size() - lanes_bytes;
+            self.heightfield = Heightfield::new(ctx, h.texels, lanes as u32, fields);
         }
     }
 
@@ -441,7 +489,7 @@ impl Resources {
     /// Writes a submission's frame uniforms, [`UNIFORM_STRIDE`] bytes apart (uniform `k` at
     /// byte `k * UNIFORM_STRIDE` of `frame_uniforms`), growing the buffer if it must.
     pub fn write_uniforms(&mut self, ctx: &GpuContext, all: &[FrameUniform]) {
-        let bytes = all.len().max(1) as u64 * UNIFORM_STRIDE;
+        let bytes = all.len() as u64 * UNIFORM_STRIDE + FRAMES_BOUND_BYTES;
         if self.frame_uniforms.size() < bytes {
             self.frame_uniforms = uniforms(ctx, all.len() as u64);
         }
@@ -454,16 +502,27 @@ impl Resources {
         }
     }
 
-    /// Makes `penetration_fields` hold at least `bytes` (a scene may have many contacts).
-    pub fn reserve_fields(&mut self, ctx: &GpuContext, bytes: u64) {
-        if self.penetration_fields.size() < bytes {
-            self.penetration_fields = storage(
-                ctx,
-                "geltip contact penetration fields",
-                bytes,
-                wgpu::BufferUsages::empty(),
-            );
+    /// Makes the height buffer hold `bytes` of contacts' fields after the lanes' heights (a
+    /// scene may have many contacts), refusing more than the device binds. A new buffer is
+    /// zero, the maps keep what they held: each lane's next frame clears and refreshes the
+    /// texels its last one left, as ever.
+    pub fn reserve_fields(&mut self, ctx: &GpuContext, bytes: u64) -> Result<()> {
+        let h = &mut self.heightfield;
+        let total = h.lane_bytes(Map::Height) * h.lanes as u64 + bytes;
+        let allowed = ctx.device.limits().max_storage_buffer_binding_size;
+        if total > allowed {
+            return Err(GeltipError::input(
+                "batch",
+                format!(
+                    "its contacts' penetration fields need {total} byte GPU buffers; this device allows {allowed}"
+                ),
+            ));
         }
+        if h.buffer(Map::Height).size() < total {
+            let none = wgpu::BufferUsages::empty();
+            h.buffers[Map::Height as usize] = storage(ctx, "geltip height", total, none);
+        }
+        Ok(())
     }
 
     /// Uploads a mesh's baked SDF grid, once per mesh (nothing for a built-in solid).
@@ -499,15 +558,17 @@ impl Resources {
 }
 
 impl Heightfield {
-    fn new(ctx: &GpuContext, texels: u32) -> Heightfield {
-        let n = texels as u64 * texels as u64;
+    /// `lanes` heightfields of `texels` per side, and `fields` bytes for the contacts' own
+    /// penetration fields after them.
+    fn new(ctx: &GpuContext, texels: u32, lanes: u32, fields: u64) -> Heightfield {
+        let n = texels as u64 * texels as u64 * lanes as u64;
         let none = wgpu::BufferUsages::empty();
-        let map = |label, format| map_texture(ctx, label, (texels, texels), format);
+        let map = |label, format| map_texture(ctx, label, (texels, texels), Some(lanes), format);
         Heightfield {
             buffers: [
                 storage(ctx, "geltip penetration", n * 4, none),
                 storage(ctx, "geltip elastomer scratch", n * 16, none),
-                storage(ctx, "geltip height", n * 4, none),
+                storage(ctx, "geltip height", n * 4 + fields, none),
             ],
             maps: [
                 map("geltip penetration map", wgpu::TextureFormat::R32Float),
@@ -515,6 +576,32 @@ impl Heightfield {
                 map("geltip height map", wgpu::TextureFormat::R32Float),
             ],
             texels,
+            lanes,
+        }
+    }
+
+    /// Bytes of one lane of `map`'s buffer.
+    fn lane_bytes(&self, map: Map) -> u64 {
+        let n = self.texels as u64;
+        n * n * self.map(map).texel_bytes as u64
+    }
+
+    /// Lanes held.
+    pub fn lanes(&self) -> u32 {
+        self.lanes
+    }
+
+    /// The word of the height buffer where the contacts' own penetration fields start.
+    pub fn fields_at(&self) -> u64 {
+        self.lane_bytes(Map::Height) / 4 * self.lanes as u64
+    }
+
+    /// Every lane, all of it.
+    pub fn everything(&self) -> LaneSpan {
+        LaneSpan {
+            first: 0,
+            last: self.lanes - 1,
+            rect: self.whole(),
         }
     }
 
@@ -536,59 +623,52 @@ impl Heightfield {
         }
     }
 
-    /// Zeroes the buffers' rows `rect` spans (all of them without a rect).
-    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder, rect: Option<Rect>) {
-        let row = self.texels as u64;
+    /// Zeroes the buffers from the first lane's row `span.rect.y` to the last lane's row
+    /// before `span.rect.y + span.rect.h` (every row of the lanes between): one clear a
+    /// buffer however many lanes.
+    pub fn clear(&self, encoder: &mut wgpu::CommandEncoder, span: LaneSpan) {
+        let n = self.texels as u64;
+        let r = span.rect;
+        let from = (span.first as u64 * n + r.y as u64) * n;
+        let to = (span.last as u64 * n + (r.y + r.h) as u64) * n;
         for map in Map::ALL {
             let bytes = self.map(map).texel_bytes as u64;
-            match rect {
-                Some(r) => encoder.clear_buffer(
-                    self.buffer(map),
-                    r.y as u64 * row * bytes,
-                    Some(r.h as u64 * row * bytes),
-                ),
-                None => encoder.clear_buffer(self.buffer(map), 0, None),
-            }
+            encoder.clear_buffer(self.buffer(map), from * bytes, Some((to - from) * bytes));
         }
     }
 
-    /// Copies `rect` of the buffer behind `map` into the map (all of it without a rect).
-    pub fn refresh(&self, encoder: &mut wgpu::CommandEncoder, map: Map, rect: Option<Rect>) {
+    /// Copies `span.rect` of the buffer behind `map` into the map, on each of its lanes: one
+    /// copy however many lanes.
+    pub fn refresh(&self, encoder: &mut wgpu::CommandEncoder, map: Map, span: LaneSpan) {
         let n = self.texels;
-        let r = rect.unwrap_or(self.whole());
+        let r = span.rect;
         let target = self.map(map);
-        let bytes = target.texel_bytes;
+        let bytes = target.texel_bytes as u64;
+        let lane = self.lane_bytes(map);
         encoder.copy_buffer_to_texture(
             wgpu::TexelCopyBufferInfo {
                 buffer: self.buffer(map),
                 layout: wgpu::TexelCopyBufferLayout {
-                    offset: (r.y as u64 * n as u64 + r.x as u64) * bytes as u64,
-                    bytes_per_row: Some(n * bytes),
-                    rows_per_image: None,
+                    offset: span.first as u64 * lane + (r.y as u64 * n as u64 + r.x as u64) * bytes,
+                    bytes_per_row: Some(n * bytes as u32),
+                    rows_per_image: Some(n),
                 },
             },
-            rect_of(&target.texture, r),
-            extent(r),
-        );
-    }
-
-    /// Copies the contact pass's own penetration (left in the height buffer over the rows of
-    /// `pressed`) to byte `offset` of `fields`, before the parallels pass overwrites it.
-    /// (Outside `pressed` those rows may hold another contact's penetration.)
-    pub fn copy_field(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        pressed: Rect,
-        fields: &wgpu::Buffer,
-        offset: u64,
-    ) {
-        let row = self.texels as u64 * 4;
-        encoder.copy_buffer_to_buffer(
-            self.buffer(Map::Height),
-            pressed.y as u64 * row,
-            fields,
-            offset,
-            Some(pressed.h as u64 * row),
+            wgpu::TexelCopyTextureInfo {
+                texture: &target.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: r.x,
+                    y: r.y,
+                    z: span.first,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width: r.w,
+                height: r.h,
+                depth_or_array_layers: span.last - span.first + 1,
+            },
         );
     }
 }

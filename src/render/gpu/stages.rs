@@ -4,64 +4,67 @@
 
 use super::layout::{
     dispatch_args_at, groups, DEEP_DISPATCH, DISPATCH_ARGS_BYTES, LIST_WORKGROUP,
-    PROBES_BYTES_PER_PIXEL, SELECT_DISPATCH, SELECT_TILES_WORKGROUP, SHALLOW_DISPATCH,
-    TOUCHED_ARGS_BYTES, WORKGROUP,
+    PROBES_BYTES_PER_PIXEL, SELECT_DISPATCH, SHALLOW_DISPATCH, TOUCHED_ARGS_BYTES,
 };
 use super::pipelines::{
-    CameraPipelines, ContactPipelines, ElastomerPipelines, LedsPipelines, TouchedPipelines,
+    CameraPipelines, ContactPipelines, ElastomerPipelines, LedsPipelines, StartPipelines,
+    TouchedPipelines,
 };
 use super::record::{Groups, Recorder};
 use super::resources::Resources;
 use crate::error::Result;
-use crate::render::touched::{tile_grid, tiles_over};
+use crate::render::touched::tile_grid;
 use crate::render::Rect;
 
-/// Texel or pixel rects, each with the bind group whose frame uniform holds it as the rect
-/// its pass runs over.
-pub(super) type Pieces<'a> = [(Rect, &'a wgpu::BindGroup)];
-
-/// A contact of a frame as its contact pass needs it.
-pub(super) struct ContactPass<'a> {
+/// A stage's dispatch over frames of a wave: the bind group whose frame uniforms are
+/// theirs (by the third coordinate of the workgroups), and the workgroups.
+#[derive(Clone, Copy)]
+pub(super) struct Batch<'a> {
     pub bind: &'a wgpu::BindGroup,
-    pub kind: u32,
-    pub pressed: Rect,
-    /// Where its own penetration goes in the penetration fields.
-    pub field_offset: u64,
+    pub groups: Groups,
+}
+
+impl StartPipelines {
+    /// The frames' start: their image buffers from the reference, their counters cleared
+    /// (the heightfield's clears are [`super::frame`]'s).
+    pub fn dispatch<'a>(&'a self, rec: &mut Recorder<'a>, b: Batch<'a>) {
+        rec.dispatch(&self.frame_start, b.bind, b.groups);
+    }
 }
 
 impl ContactPipelines {
-    /// Stage 1, one contact's pass over its pressed rect, with its object's pipeline (each
-    /// pass keeps the deepest press of a texel, so a frame's contacts press the skin
-    /// together). Its own penetration is copied out ([`super::resources::Heightfield::copy_field`]) before its
-    /// frame's next contact pass, and the penetration map refreshed after the last.
-    pub fn dispatch<'a>(&'a self, rec: &mut Recorder<'a>, c: &ContactPass<'a>) -> Result<()> {
-        rec.dispatch(self.of(c.kind)?, c.bind, Groups::over(c.pressed));
+    /// Stage 1, contacts' passes over their pressed rects, with their objects' pipeline of
+    /// kind `kind` (each pass keeps the deepest press of a texel, so a frame's contacts, in
+    /// a pass each, press the skin together); each writes its own penetration into its
+    /// field, and the penetration map is refreshed after the last.
+    pub fn dispatch<'a>(&'a self, rec: &mut Recorder<'a>, kind: u32, b: Batch<'a>) -> Result<()> {
+        rec.dispatch(self.of(kind)?, b.bind, b.groups);
         Ok(())
     }
 }
 
 impl ElastomerPipelines {
-    /// Stage 2's blends along meridians over `meridians`, into the pending pass; the
-    /// elastomer map's refresh follows.
-    pub fn dispatch_meridians<'a>(&'a self, rec: &mut Recorder<'a>, meridians: &Pieces<'a>) {
-        for &(r, bind) in meridians {
-            rec.dispatch(&self.meridians, bind, Groups::over(r));
+    /// Stage 2's blends along meridians over the frames' meridian pieces, into the pending
+    /// pass; the elastomer map's refresh follows.
+    pub fn dispatch_meridians<'a>(&'a self, rec: &mut Recorder<'a>, meridians: &[Batch<'a>]) {
+        for b in meridians {
+            rec.dispatch(&self.meridians, b.bind, b.groups);
         }
     }
 
-    /// Then along parallels over `texels`; the height map's refresh follows.
-    pub fn dispatch_parallels<'a>(&'a self, rec: &mut Recorder<'a>, texels: &Pieces<'a>) {
-        for &(r, bind) in texels {
-            rec.dispatch(&self.parallels, bind, Groups::over(r));
+    /// Then along parallels over their texel pieces; the height map's refresh follows.
+    pub fn dispatch_parallels<'a>(&'a self, rec: &mut Recorder<'a>, texels: &[Batch<'a>]) {
+        for b in texels {
+            rec.dispatch(&self.parallels, b.bind, b.groups);
         }
     }
 
-    /// The skin's normals over `texels`, into the pending pass: the elastomer map's refresh
-    /// follows once the selection's first pass has joined it (both read the height map
-    /// alone).
-    pub fn record_normals<'a>(&'a self, rec: &mut Recorder<'a>, texels: &Pieces<'a>) {
-        for &(r, bind) in texels {
-            rec.dispatch(&self.skin_normals, bind, Groups::over(r));
+    /// The skin's normals over the texel pieces, into the pending pass: the elastomer
+    /// map's refresh follows once the selection's first pass has joined it (both read the
+    /// height map alone).
+    pub fn record_normals<'a>(&'a self, rec: &mut Recorder<'a>, texels: &[Batch<'a>]) {
+        for b in texels {
+            rec.dispatch(&self.skin_normals, b.bind, b.groups);
         }
     }
 }
@@ -78,27 +81,19 @@ impl TouchedPipelines {
     ) {
         copy_probes_to_map(rec.encoder(), res, (width, height));
         let (tx, ty) = tile_grid(width, height);
-        let g = Groups::Direct(groups(tx * ty, LIST_WORKGROUP), 1);
+        let g = Groups::Direct(groups(tx * ty, LIST_WORKGROUP), 1, 1);
         rec.dispatch(&self.probe_tiles, bind, g);
     }
 
-    /// The tile list of the frame in `slot`: the tiles of `pixels` whose probes see a
-    /// displaced texel, into the pending pass (`bind`'s frame uniform holds `pixels` as its
-    /// pixel rect).
-    pub fn record_tiles<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        pixels: Rect,
-        bind: &'a wgpu::BindGroup,
-    ) {
-        let (columns, rows) = tiles_over(pixels);
-        let tiles = columns.len() as u32 * rows.len() as u32;
-        let g = Groups::Direct(groups(tiles, SELECT_TILES_WORKGROUP), 1);
-        rec.dispatch(&self.select_tiles, bind, g);
+    /// The frames' tile lists: the tiles of each one's pixel rect whose probes see a
+    /// displaced texel, into the pending pass.
+    pub fn record_tiles<'a>(&'a self, rec: &mut Recorder<'a>, b: Batch<'a>) {
+        rec.dispatch(&self.select_tiles, b.bind, b.groups);
     }
 
-    /// The touched list of the frame in `slot`, from the listed tiles: a pass sized by the
-    /// tile list, whose arguments [`copy_dispatch_args`] copied.
+    /// The touched lists of the frames of the wave whose first frame is in `slot`, from the
+    /// listed tiles: a pass sized by the longest tile list, whose arguments
+    /// [`copy_dispatch_args`] copied.
     pub fn dispatch_listed<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
@@ -116,9 +111,9 @@ pub(super) const TILE_LIST_ARGS: (u32, u64) = (SELECT_DISPATCH, 12);
 /// The camera's two dispatches, from the touched list's lengths.
 pub(super) const TOUCHED_LIST_ARGS: (u32, u64) = (SHALLOW_DISPATCH, TOUCHED_ARGS_BYTES);
 
-/// Indirect dispatch arguments from frame `slot`'s counters, `bytes` of them from counter
-/// `first` on ([`TILE_LIST_ARGS`], [`TOUCHED_LIST_ARGS`]), into the frame's dispatch
-/// arguments at their place.
+/// Indirect dispatch arguments from frame `slot`'s counters (a wave's first frame's hold
+/// the wave's), `bytes` of them from counter `first` on ([`TILE_LIST_ARGS`],
+/// [`TOUCHED_LIST_ARGS`]), into the frame's dispatch arguments at their place.
 pub(super) fn copy_dispatch_args(
     encoder: &mut wgpu::CommandEncoder,
     res: &Resources,
@@ -145,8 +140,9 @@ impl CameraPipelines {
         rec.dispatch(&self.reference, bind, Groups::over(pixels));
     }
 
-    /// Stage 3 of a contact frame: the passes over the touched list of the frame in `slot`,
-    /// the shallow pixels' and the deep ones', sized by it ([`copy_dispatch_args`]).
+    /// Stage 3 of contact frames: the passes over the touched lists of the wave whose first
+    /// frame is in `slot`, the shallow pixels' and the deep ones', sized by the longest
+    /// ([`copy_dispatch_args`]).
     pub fn dispatch_touched<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
@@ -164,15 +160,9 @@ impl CameraPipelines {
 }
 
 impl LedsPipelines {
-    /// Stage 4: the sensor's noise over every pixel of a finished `width` x `height` frame.
-    pub fn record_noise<'a>(
-        &'a self,
-        rec: &mut Recorder<'a>,
-        bind: &'a wgpu::BindGroup,
-        (width, height): (u32, u32),
-    ) {
-        let g = Groups::Direct(groups(width, WORKGROUP), groups(height, WORKGROUP));
-        rec.dispatch(&self.add_noise, bind, g);
+    /// Stage 4: the sensor's noise over every pixel of the finished frames.
+    pub fn record_noise<'a>(&'a self, rec: &mut Recorder<'a>, b: Batch<'a>) {
+        rec.dispatch(&self.add_noise, b.bind, b.groups);
     }
 }
 
