@@ -131,14 +131,36 @@ impl<'c> Binds<'c> {
         slots: WaveRange,
         grid: Option<&'c Object>,
     ) -> Vec<(usize, u32)> {
+        // Only a loaded mesh's grid tells groups apart (any other binds the empty one).
+        let grid = grid.filter(|o| matches!(o, Object::Mesh { .. }));
         items
             .chunks(FRAMES_BOUND as usize)
-            .map(|chunk| {
-                self.groups.push((self.uniforms.len(), slots, grid));
-                self.uniforms.extend_from_slice(chunk);
-                (self.groups.len() - 1, chunk.len() as u32)
-            })
+            .map(|chunk| (self.group_of(chunk, slots, grid), chunk.len() as u32))
             .collect()
+    }
+
+    /// A group of the uniforms `chunk`: an earlier one that binds the same (a frame of one
+    /// contact binds one group for all its passes: lavapipe charges each change of group),
+    /// else a new one.
+    fn group_of(
+        &mut self,
+        chunk: &[FrameUniform],
+        slots: WaveRange,
+        grid: Option<&'c Object>,
+    ) -> usize {
+        let bytes: &[u8] = bytemuck::cast_slice(chunk);
+        let same = |&(first, w, g): &(usize, WaveRange, Option<&Object>)| {
+            let held = self.uniforms.get(first..first + chunk.len());
+            w == slots
+                && g.map(|o| o as *const Object) == grid.map(|o| o as *const Object)
+                && held.is_some_and(|h| bytemuck::cast_slice::<_, u8>(h) == bytes)
+        };
+        if let Some(k) = self.groups.iter().position(same) {
+            return k;
+        }
+        self.groups.push((self.uniforms.len(), slots, grid));
+        self.uniforms.extend_from_slice(chunk);
+        self.groups.len() - 1
     }
 
     /// A dispatch each for `items` (with the rects their passes run over), sized by the
@@ -403,11 +425,27 @@ impl Renderer {
         };
         let seen = plans.iter().filter(|p| p.pixels.is_some()).count() as u32;
         let fields_at = res.heightfield.fields_at();
+        // Each frame's first pressing contact's field (its uniform's, as the frame's is).
+        let mut at = fields;
+        let first_fields: Vec<u64> = scenes
+            .iter()
+            .map(|contacts| {
+                let (mine, rest) = at.split_at(contacts.len().min(at.len()));
+                at = rest;
+                let pressing = contacts
+                    .iter()
+                    .zip(mine)
+                    .filter(|(c, _)| c.footprint.is_some());
+                pressing.map(|(_, &o)| o).next().unwrap_or(0)
+            })
+            .collect();
         // Each frame's uniform, with where its data lies in the wave's bindings.
         let placed: Vec<FrameUniform> = plans
             .iter()
-            .map(|p| {
+            .zip(&first_fields)
+            .map(|(p, &field)| {
                 let mut u = p.uniform;
+                u.field_at = (fields_at + field / 4) as u32;
                 let k = p.slot - first_slot;
                 u.lane = self.lane_of(p.slot) as u32;
                 u.image_at = ((p.image_offset - image_offset) / 4) as u32;
@@ -446,7 +484,10 @@ impl Renderer {
             let pressing = contacts.iter().zip(mine);
             let pressing = pressing.filter_map(|(c, &o)| Some((c, c.footprint?, o)));
             for (k, (c, f, offset)) in pressing.enumerate() {
+                // Its frame's places, so that a frame of one contact has one uniform.
                 let mut u = c.uniform.holding(plan.holding);
+                u.list_at = frame.list_at;
+                u.listed_frames = frame.listed_frames;
                 u.noise_seed = plan.uniform.noise_seed;
                 u.lane = frame.lane;
                 u.image_at = frame.image_at;
