@@ -503,31 +503,25 @@ impl Renderer {
             .iter()
             .map(|round| contact_dispatches(binds, round, slots))
             .collect();
-        let pressed = || {
-            plans
-                .iter()
-                .zip(&placed)
-                .filter(|(p, _)| p.texel_span().is_some())
+        // Each pressing frame's pieces, each with the frame's uniform holding it as the rect
+        // its pass runs over.
+        let pieces = |rects: fn(&FramePlan) -> &[Rect], set: fn(&mut FrameUniform, Rect)| {
+            let pressed = plans.iter().zip(&placed);
+            let pressed = pressed.filter(|(p, _)| p.texel_span().is_some());
+            let all: Vec<(FrameUniform, Rect)> = pressed
+                .flat_map(|(p, &u)| {
+                    rects(p).iter().map(move |&r| {
+                        let mut u = u;
+                        set(&mut u, r);
+                        (u, r)
+                    })
+                })
+                .collect();
+            all
         };
-        let meridians: Vec<(FrameUniform, Rect)> = pressed()
-            .flat_map(|(p, &u)| {
-                p.meridians.iter().map(move |&m| {
-                    let mut u = u;
-                    u.meridian_rect = rect4(Some(m));
-                    (u, m)
-                })
-            })
-            .collect();
+        let meridians = pieces(|p| &p.meridians, |u, r| u.meridian_rect = rect4(Some(r)));
         wave.meridians = binds.over(&meridians, slots);
-        let texels: Vec<(FrameUniform, Rect)> = pressed()
-            .flat_map(|(p, &u)| {
-                p.texels.iter().map(move |&t| {
-                    let mut u = u;
-                    u.texel_rect = rect4(Some(t));
-                    (u, t)
-                })
-            })
-            .collect();
+        let texels = pieces(|p| &p.texels, |u, r| u.texel_rect = rect4(Some(r)));
         wave.texels = binds.over(&texels, slots);
         let listed: Vec<(FrameUniform, Rect)> = plans
             .iter()
