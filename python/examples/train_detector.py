@@ -1,7 +1,7 @@
 """A contact detector trained on geltip's synthetic frames only, scored on a real sensor's.
 
-    python python/examples/train_detector.py                      # the full run (~30 min, 2 cores)
-    python python/examples/train_detector.py --quick --out runs/q  # a smoke run (~2 min)
+    python python/examples/train_detector.py                      # the full run (about an hour, 2 cores)
+    python python/examples/train_detector.py --quick --out runs/q  # a smoke run (a few minutes)
 
 The sim-to-real check: `geltip dataset` renders contacts on the calibrated `allsight`
 sensor; each render's change from the empty finger is put on a real no-contact frame (the
@@ -326,7 +326,7 @@ def detector(net, device, threshold):
         if p >= threshold:
             u, v = soft_argmax(heat, shape)[0].tolist()
             found = [{"pixel": [u, v], "confidence": p}]
-        answers.append({"sample": len(answers), "detections": found, "presence": p})
+        answers.append({"sample": len(answers), "detections": found})
         return found
 
     detect.__name__ = "synthetic-cnn"
@@ -379,7 +379,7 @@ def main():
     scored = time.time() - t
     with open(args.out / "predictions.jsonl", "w") as f:
         for a in answers:
-            f.write(json.dumps({"sample": a["sample"], "detections": a["detections"]}) + "\n")
+            f.write(json.dumps(a) + "\n")
     (args.out / "training.json").write_text(json.dumps({
         "device": where, "samples": len(data[0]), "epochs": log,
         "prepare_s": prepared, "train_s": trained, "score_s": scored,

@@ -239,15 +239,14 @@ fn decide(z: &[f64], mask: &[bool], w: usize, h: usize, config: &ChangeConfig) -
         .map(|&v| v > config.region_threshold)
         .collect();
     let regions = components_4(&above, w, h);
-    let peaks: Vec<(f64, &Vec<usize>)> = regions
+    let best = regions
         .iter()
         .filter(|r| r.len() >= config.min_area_px)
         .map(|r| {
             let peak = r.iter().map(|&i| scored[i]).fold(f64::MIN, f64::max);
             (peak, r)
         })
-        .collect();
-    let best = peaks.iter().copied().max_by(|a, b| a.0.total_cmp(&b.0));
+        .max_by(|a, b| a.0.total_cmp(&b.0));
     let overall = scored.iter().copied().fold(0.0, f64::max);
     let (score, pixel, region) = match best {
         Some((peak, region)) => {
