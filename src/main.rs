@@ -26,6 +26,7 @@ fn main() {
         Command::Dataset(args) => cli::dataset::dataset(args),
         Command::Evaluate(args) => cli::evaluate::evaluate(args),
         Command::Calibrate(args) => cli::calibrate::calibrate(args),
+        Command::Imprint(args) => cli::imprint::imprint(args),
         Command::Preview(args) => cli::jobs::preview(args),
         Command::Stability(args) => cli::jobs::stability(args),
         Command::Tradeoff(args) => cli::jobs::tradeoff(args),

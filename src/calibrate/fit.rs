@@ -55,7 +55,7 @@ pub fn residuals(model: &Model, samples: &Samples, p: &[f64]) -> Vec<f64> {
 
 /// sign(r) sqrt(2 c^2 (sqrt(1 + (r/c)^2) - 1)): r for small residuals, sqrt(2 c |r|) for
 /// large ones.
-fn soft_l1(r: f64) -> f64 {
+pub fn soft_l1(r: f64) -> f64 {
     let c = ROBUST_SCALE;
     let q = r / c;
     r.signum() * c * (2.0 * ((1.0 + q * q).sqrt() - 1.0)).sqrt()

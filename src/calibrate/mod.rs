@@ -10,6 +10,7 @@ pub mod circle;
 pub mod contacts;
 pub mod fit;
 pub mod frames;
+pub mod imprint;
 pub mod model;
 pub mod quality;
 pub mod solve;

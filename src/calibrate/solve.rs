@@ -2,6 +2,7 @@
 //! forward-difference Jacobian, box bounds and the parameters' standard errors.
 
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Solves the n x n system `a x = b` (row-major) by Gaussian elimination with partial
 /// pivoting; `None` when it is singular.
@@ -110,6 +111,35 @@ pub fn levenberg_marquardt<F>(
 where
     F: Fn(&[f64]) -> Vec<f64> + Sync,
 {
+    let sweeps = Sweeps::dense(start.len());
+    levenberg_marquardt_sweeps(start, bounds, max_iterations, &sweeps, residuals)
+}
+
+/// Which parameters a forward difference moves at once. Parameters that move disjoint
+/// residuals (each frame's own depth, say) share a sweep: one evaluation of the residuals
+/// gives all their columns, each read from its own range and zero elsewhere.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweeps(pub Vec<Vec<(usize, Option<Range<usize>>)>>);
+
+impl Sweeps {
+    /// Every parameter alone, over every residual.
+    pub fn dense(n: usize) -> Sweeps {
+        Sweeps((0..n).map(|i| vec![(i, None)]).collect())
+    }
+}
+
+/// [`levenberg_marquardt`] with the Jacobian found by `sweeps`, which must name every
+/// parameter once.
+pub fn levenberg_marquardt_sweeps<F>(
+    start: &[f64],
+    bounds: &[Bound],
+    max_iterations: usize,
+    sweeps: &Sweeps,
+    residuals: F,
+) -> Fit
+where
+    F: Fn(&[f64]) -> Vec<f64> + Sync,
+{
     let n = start.len();
     let clamp = |p: &mut [f64]| {
         for (v, b) in p.iter_mut().zip(bounds) {
@@ -129,8 +159,8 @@ where
     let mut small_gains = 0;
     while iterations < max_iterations {
         if fresh_jacobian {
-            let columns = jacobian(&params, &r, bounds, &residuals);
-            normal_equations(&columns, &r, m, &mut jtj, &mut g);
+            let columns = jacobian(&params, &r, bounds, sweeps, &residuals);
+            normal_equations(&columns, &r, &mut jtj, &mut g);
             fresh_jacobian = false;
         }
         iterations += 1;
@@ -163,8 +193,8 @@ where
         }
     }
     if fresh_jacobian {
-        let columns = jacobian(&params, &r, bounds, &residuals);
-        normal_equations(&columns, &r, m, &mut jtj, &mut g);
+        let columns = jacobian(&params, &r, bounds, sweeps, &residuals);
+        normal_equations(&columns, &r, &mut jtj, &mut g);
     }
     Fit {
         params,
@@ -212,38 +242,96 @@ fn half_squares(r: &[f64]) -> f64 {
     0.5 * r.iter().map(|v| v * v).sum::<f64>()
 }
 
-/// Forward-difference columns of the Jacobian, one parameter per task; a step that would
-/// leave the box goes backwards.
-fn jacobian<F>(params: &[f64], r: &[f64], bounds: &[Bound], residuals: &F) -> Vec<Vec<f64>>
+/// A Jacobian column: its values over the residuals from `start` on, zero elsewhere.
+struct Column {
+    start: usize,
+    values: Vec<f64>,
+}
+
+impl Column {
+    fn range(&self) -> Range<usize> {
+        self.start..self.start + self.values.len()
+    }
+}
+
+/// Forward-difference columns of the Jacobian, one sweep per task; a step that would leave
+/// the box goes backwards.
+fn jacobian<F>(
+    params: &[f64],
+    r: &[f64],
+    bounds: &[Bound],
+    sweeps: &Sweeps,
+    residuals: &F,
+) -> Vec<Column>
 where
     F: Fn(&[f64]) -> Vec<f64> + Sync,
 {
-    (0..params.len())
-        .into_par_iter()
-        .map(|i| {
-            let b = bounds[i];
+    let per_sweep: Vec<Vec<(usize, Column)>> = sweeps
+        .0
+        .par_iter()
+        .map(|sweep| {
             let mut p = params.to_vec();
-            let h = if p[i] + b.step <= b.hi {
-                b.step
-            } else {
-                -b.step
-            };
-            p[i] += h;
+            let steps: Vec<f64> = sweep
+                .iter()
+                .map(|&(i, _)| {
+                    let b = bounds[i];
+                    let h = if p[i] + b.step <= b.hi {
+                        b.step
+                    } else {
+                        -b.step
+                    };
+                    p[i] += h;
+                    h
+                })
+                .collect();
             let rp = residuals(&p);
-            rp.iter().zip(r).map(|(a, b)| (a - b) / h).collect()
+            sweep
+                .iter()
+                .zip(steps)
+                .map(|((i, range), h)| {
+                    let range = range.clone().unwrap_or(0..r.len());
+                    let values = range.clone().map(|k| (rp[k] - r[k]) / h).collect();
+                    (
+                        *i,
+                        Column {
+                            start: range.start,
+                            values,
+                        },
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    let mut columns: Vec<Option<Column>> = (0..params.len()).map(|_| None).collect();
+    for (i, c) in per_sweep.into_iter().flatten() {
+        columns[i] = Some(c);
+    }
+    columns
+        .into_iter()
+        .map(|c| {
+            c.unwrap_or(Column {
+                start: 0,
+                values: Vec::new(),
+            })
         })
         .collect()
 }
 
-fn normal_equations(columns: &[Vec<f64>], r: &[f64], m: usize, jtj: &mut [f64], g: &mut [f64]) {
+fn normal_equations(columns: &[Column], r: &[f64], jtj: &mut [f64], g: &mut [f64]) {
     let n = columns.len();
     for i in 0..n {
+        let a = &columns[i];
         for j in i..n {
-            let v: f64 = (0..m).map(|k| columns[i][k] * columns[j][k]).sum();
+            let b = &columns[j];
+            let (ra, rb) = (a.range(), b.range());
+            let overlap = ra.start.max(rb.start)..ra.end.min(rb.end);
+            let v: f64 = overlap
+                .map(|k| a.values[k - a.start] * b.values[k - b.start])
+                .sum();
             jtj[i * n + j] = v;
             jtj[j * n + i] = v;
         }
-        g[i] = -(0..m).map(|k| columns[i][k] * r[k]).sum::<f64>();
+        g[i] = -a.range().map(|k| a.values[k - a.start] * r[k]).sum::<f64>();
     }
 }
 
@@ -286,5 +374,52 @@ mod tests {
         let errors = fit.standard_errors();
         assert!(errors[0].is_finite() && errors[1].is_finite());
         assert!(errors[2].is_infinite(), "{errors:?}");
+    }
+
+    #[test]
+    fn sweeps_over_disjoint_residuals_fit_as_the_dense_jacobian_does() {
+        // Two curves a exp(-b_k t): a shared, each b_k moving only its own curve's residuals.
+        let t: Vec<f64> = (0..30).map(|i| i as f64 * 0.1).collect();
+        let truth: [f64; 3] = [2.0, 0.7, 1.6];
+        let y: Vec<f64> = [truth[1], truth[2]]
+            .iter()
+            .flat_map(|&b| t.iter().map(move |&t| truth[0] * (-b * t).exp()))
+            .collect();
+        let residuals = |p: &[f64]| -> Vec<f64> {
+            [p[1], p[2]]
+                .iter()
+                .flat_map(|&b: &f64| t.iter().map(move |&t| p[0] * (-b * t).exp()))
+                .zip(&y)
+                .map(|(m, y)| m - y)
+                .collect()
+        };
+        let bounds = [Bound {
+            lo: 0.0,
+            hi: 10.0,
+            step: 1e-6,
+        }; 3];
+        let start = [1.0, 0.3, 0.3];
+        let sweeps = Sweeps(vec![
+            vec![(0, None)],
+            vec![(1, Some(0..30)), (2, Some(30..60))],
+        ]);
+        let sparse = levenberg_marquardt_sweeps(&start, &bounds, 200, &sweeps, residuals);
+        let dense = levenberg_marquardt(&start, &bounds, 200, residuals);
+        for k in 0..3 {
+            assert!(
+                (sparse.params[k] - truth[k]).abs() < 1e-6,
+                "{:?}",
+                sparse.params
+            );
+            assert!((sparse.params[k] - dense.params[k]).abs() < 1e-6);
+        }
+        for (a, b) in sparse.jtj.iter().zip(&dense.jtj) {
+            assert!(
+                (a - b).abs() < 1e-3 * (1.0 + b.abs()),
+                "{:?} {:?}",
+                sparse.jtj,
+                dense.jtj
+            );
+        }
     }
 }

@@ -4,6 +4,7 @@
 pub mod calibrate;
 pub mod dataset;
 pub mod evaluate;
+pub mod imprint;
 pub mod jobs;
 pub mod localise;
 pub mod progress;
@@ -81,6 +82,14 @@ pub enum Command {
     ///   geltip calibrate --sensor paper --empty empty.png --out calibrated
     #[command(verbatim_doc_comment)]
     Calibrate(calibrate::CalibrateArgs),
+    /// Fit the imprint's look (the gel's blend, drape, bulge and shading, and the indenter's
+    /// radius) to a real sensor's labelled contact frames, and score it on other frames of
+    /// the set inside a window round each imprint.
+    ///
+    /// Example:
+    ///   geltip imprint --sensor allsight --real labels.json --out imprint
+    #[command(verbatim_doc_comment)]
+    Imprint(imprint::ImprintArgs),
     /// Preview sensor designs before building them: what the camera sees, the resolution
     /// down the finger, a picture per design, and a lens sweep.
     ///

@@ -1,0 +1,408 @@
+//! `geltip imprint`: the imprint's look fitted to a real sensor's labelled contact frames
+//! ([`crate::calibrate::imprint`]), judged on other contact frames of the same set by the GPU
+//! renderer, and written with its report and a picture.
+
+use super::calibrate::sensor_toml;
+use crate::calibrate::imprint::{self, ImprintFit, ImprintOptions, Located, Placed, Skipped};
+use crate::error::{GeltipError, Result};
+use crate::evaluate::real::RealSet;
+use crate::output;
+use crate::render::gpu::Renderer;
+use crate::sensor::Sensor;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Squared errors summed over a window's values, and how many values.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Squares {
+    pub sum: f64,
+    pub count: usize,
+}
+
+impl Squares {
+    fn add(&mut self, other: Squares) {
+        self.sum += other.sum;
+        self.count += other.count;
+    }
+
+    /// PSNR (dB) of the pooled mean square; infinite for none.
+    pub fn psnr_db(&self) -> f64 {
+        if self.count == 0 || self.sum == 0.0 {
+            return f64::INFINITY;
+        }
+        10.0 * (255.0f64 * 255.0 / (self.sum / self.count as f64)).log10()
+    }
+}
+
+/// How one look matches a frame inside its window: the render, and the real reference with
+/// the rendered change added (what a dataset composited over real frames holds).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Match {
+    pub render: Squares,
+    pub composite: Squares,
+}
+
+impl Match {
+    fn add(&mut self, other: Match) {
+        self.render.add(other.render);
+        self.composite.add(other.composite);
+    }
+}
+
+/// A group's (or the whole set's, "all") scores.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub group: String,
+    pub frames: usize,
+    /// The start sensor's look, the fitted one, and the real reference unchanged (no
+    /// imprint at all), each against the real frame.
+    pub before: Match,
+    pub after: Match,
+    pub unchanged: Squares,
+}
+
+/// One scored frame.
+#[derive(Debug, Clone)]
+pub struct Scored {
+    pub located: usize,
+    pub before: (Placed, Match),
+    pub after: (Placed, Match),
+    pub unchanged: Squares,
+}
+
+/// The fit judged on frames it did not see; nothing written yet.
+#[derive(Debug)]
+pub struct Judged {
+    pub fit: ImprintFit,
+    pub sensor_toml: String,
+    pub located: Vec<Located>,
+    pub skipped: Vec<Skipped>,
+    pub scored: Vec<Scored>,
+    pub rows: Vec<Row>,
+    /// Per group, its first scored frame's window: real | fitted | residual | start.
+    pub picture: image::RgbImage,
+    pub report: Value,
+    pub seconds: f64,
+}
+
+/// Fits, judges, writes `out`'s files.
+pub fn run(
+    start: &Sensor,
+    set: &RealSet,
+    set_path: &Path,
+    options: &ImprintOptions,
+    out: &Path,
+    progress: &dyn Fn(&str),
+) -> Result<(Judged, Vec<PathBuf>)> {
+    let judged = judge(start, set, set_path, options, progress)?;
+    progress("writing");
+    let files = write(&judged, out)?;
+    Ok((judged, files))
+}
+
+/// Locates the set's imprints, fits the look to some, scores it on others.
+pub fn judge(
+    start: &Sensor,
+    set: &RealSet,
+    set_path: &Path,
+    options: &ImprintOptions,
+    progress: &dyn Fn(&str),
+) -> Result<Judged> {
+    options.validate()?;
+    let started = Instant::now();
+    progress("finding the imprints");
+    let (located, skipped) = imprint::locate(start, set, options.window_px)?;
+    let chosen = imprint::spread(&located, options.fit_frames, &[]);
+    let scored_ids = imprint::spread(&located, options.score_frames, &chosen);
+    let fit = imprint::fit(start, &located, &chosen, options, progress)?;
+    let sensor_toml = sensor_toml(&fit.config)?;
+    let fitted = Sensor::from_toml("imprint", &sensor_toml)?;
+    if fitted.config != fit.config {
+        return Err(GeltipError::input(
+            "sensor.toml",
+            "the written file does not load back as the fitted sensor",
+        ));
+    }
+    progress(&format!("scoring on {} other frames", scored_ids.len()));
+    let place_steps = options.place_iterations;
+    let before_places = imprint::place_all(
+        &start.config,
+        options.start_radius_mm,
+        &located,
+        &scored_ids,
+        place_steps,
+    )?;
+    let after_places = imprint::place_all(
+        &fit.config,
+        fit.radius_mm,
+        &located,
+        &scored_ids,
+        place_steps,
+    )?;
+    let mut start_renderer = Renderer::new(start)?;
+    let mut fitted_renderer = Renderer::new(&fitted)?;
+    let mut scored = Vec::new();
+    let mut tiles: Vec<(String, [Vec<u8>; 4])> = Vec::new();
+    for ((&k, b), a) in scored_ids.iter().zip(before_places).zip(after_places) {
+        let l = &located[k];
+        let (before, before_img) = judge_look(&mut start_renderer, l, &b, options.start_radius_mm)?;
+        let (after, after_img) = judge_look(&mut fitted_renderer, l, &a, fit.radius_mm)?;
+        let unchanged = squares(&l.reference, &l.frame, &l.window);
+        if !tiles.iter().any(|(g, _)| *g == l.group) {
+            let real = l.frame.clone();
+            let residual: Vec<u8> = after_img
+                .iter()
+                .zip(&real)
+                .map(|(&a, &r)| (128.0 + 2.0 * (a as f64 - r as f64)).clamp(0.0, 255.0) as u8)
+                .collect();
+            tiles.push((l.group.clone(), [real, after_img, residual, before_img]));
+        }
+        scored.push(Scored {
+            located: k,
+            before: (b, before),
+            after: (a, after),
+            unchanged,
+        });
+    }
+    let rows = rows(&located, &scored);
+    let picture = picture(start, &located, &scored, &tiles, options.window_px);
+    let seconds = started.elapsed().as_secs_f64();
+    let report = report_json(
+        start, set_path, options, &fit, &located, &skipped, &scored, &rows, seconds,
+    );
+    Ok(Judged {
+        fit,
+        sensor_toml,
+        located,
+        skipped,
+        scored,
+        rows,
+        picture,
+        report,
+        seconds,
+    })
+}
+
+/// Renders `placed` with `renderer`'s sensor and compares it inside `l`'s window; also
+/// returns the composite (the real reference plus the rendered change) as a full image.
+fn judge_look(
+    renderer: &mut Renderer,
+    l: &Located,
+    placed: &Placed,
+    radius: f64,
+) -> Result<(Match, Vec<u8>)> {
+    let (frame, _) = renderer.render(&placed.press(radius))?;
+    let render = frame.to_rgb().into_raw();
+    let empty = renderer.reference().to_rgb().into_raw();
+    let composite: Vec<u8> = l
+        .reference
+        .iter()
+        .zip(render.iter().zip(&empty))
+        .map(|(&r, (&a, &e))| (r as f64 + a as f64 - e as f64).round().clamp(0.0, 255.0) as u8)
+        .collect();
+    Ok((
+        Match {
+            render: squares(&render, &l.frame, &l.window),
+            composite: squares(&composite, &l.frame, &l.window),
+        },
+        composite,
+    ))
+}
+
+fn squares(a: &[u8], b: &[u8], window: &[usize]) -> Squares {
+    let sum = window
+        .iter()
+        .flat_map(|&i| (0..3).map(move |c| i * 3 + c))
+        .map(|k| (a[k] as f64 - b[k] as f64).powi(2))
+        .sum();
+    Squares {
+        sum,
+        count: window.len() * 3,
+    }
+}
+
+fn rows(located: &[Located], scored: &[Scored]) -> Vec<Row> {
+    let mut rows: Vec<Row> = Vec::new();
+    let empty = |group: &str| Row {
+        group: group.to_string(),
+        frames: 0,
+        before: Match::default(),
+        after: Match::default(),
+        unchanged: Squares::default(),
+    };
+    let mut all = empty("all");
+    for s in scored {
+        let group = &located[s.located].group;
+        let i = match rows.iter().position(|r| r.group == *group) {
+            Some(i) => i,
+            None => {
+                rows.push(empty(group));
+                rows.len() - 1
+            }
+        };
+        for row in [&mut rows[i], &mut all] {
+            row.frames += 1;
+            row.before.add(s.before.1);
+            row.after.add(s.after.1);
+            row.unchanged.add(s.unchanged);
+        }
+    }
+    rows.push(all);
+    rows
+}
+
+/// Per group, a row of four windows (2x): the real frame, the fitted look composited on the
+/// real reference, their difference (twice, about grey), the start look composited.
+fn picture(
+    sensor: &Sensor,
+    located: &[Located],
+    scored: &[Scored],
+    tiles: &[(String, [Vec<u8>; 4])],
+    window_px: f64,
+) -> image::RgbImage {
+    let half = window_px.ceil() as i64;
+    let side = (2 * half + 1) as u32;
+    let scale = 2;
+    let tile = side * scale;
+    let mut out = image::RgbImage::from_pixel(
+        4 * tile + 3 * 4,
+        (tile + 4) * tiles.len().max(1) as u32,
+        image::Rgb([255, 255, 255]),
+    );
+    let w = sensor.width as i64;
+    let h = sensor.height as i64;
+    for (row, (group, images)) in tiles.iter().enumerate() {
+        let l = scored
+            .iter()
+            .map(|s| &located[s.located])
+            .find(|l| l.group == *group)
+            .expect("a tile's frame was scored");
+        let (cx, cy) = (l.pixel.x.round() as i64, l.pixel.y.round() as i64);
+        for (col, img) in images.iter().enumerate() {
+            for dy in -half..=half {
+                for dx in -half..=half {
+                    let (x, y) = (cx + dx, cy + dy);
+                    let px = if (0..w).contains(&x) && (0..h).contains(&y) {
+                        let i = ((y * w + x) * 3) as usize;
+                        image::Rgb([img[i], img[i + 1], img[i + 2]])
+                    } else {
+                        image::Rgb([0, 0, 0])
+                    };
+                    for sy in 0..scale {
+                        for sx in 0..scale {
+                            out.put_pixel(
+                                col as u32 * (tile + 4) + (dx + half) as u32 * scale + sx,
+                                row as u32 * (tile + 4) + (dy + half) as u32 * scale + sy,
+                                px,
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+#[allow(clippy::too_many_arguments)]
+fn report_json(
+    start: &Sensor,
+    set_path: &Path,
+    options: &ImprintOptions,
+    fit: &ImprintFit,
+    located: &[Located],
+    skipped: &[Skipped],
+    scored: &[Scored],
+    rows: &[Row],
+    seconds: f64,
+) -> Value {
+    let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    let placed =
+        |p: &Placed| json!({"s_mm": p.s_mm, "azimuth_deg": p.azimuth_deg, "depth_mm": p.depth_mm});
+    let matched = |m: &Match| {
+        json!({
+            "render_psnr_db": finite(m.render.psnr_db()),
+            "composite_psnr_db": finite(m.composite.psnr_db()),
+        })
+    };
+    json!({
+        "start_sensor": start.name,
+        "real_set": set_path,
+        "window_px": options.window_px,
+        "located": located.len(),
+        "skipped": skipped.iter().map(|s| json!({"image": s.image, "reason": s.reason})).collect::<Vec<_>>(),
+        "fitted_frames": fit.frames.iter().map(|(k, p)| json!({"image": located[*k].image, "group": located[*k].group, "contact": placed(p)})).collect::<Vec<_>>(),
+        "start_values": imprint::look(&start.config, options.start_radius_mm)
+            .into_iter()
+            .map(|(name, value)| json!({"name": name, "value": value}))
+            .collect::<Vec<_>>(),
+        "values": fit.values.iter().map(|v| json!({
+            "name": v.name,
+            "value": v.value,
+            "std_error": finite(v.std_error),
+        })).collect::<Vec<_>>(),
+        "at_bounds": fit.at_bounds.iter().map(|b| json!({"name": b.name, "value": b.value, "bound": b.side})).collect::<Vec<_>>(),
+        "fit": {
+            "robust_cost": {"before": fit.cost_before, "after": fit.cost_after},
+            "iterations": fit.iterations,
+            "renders": fit.renders,
+            "start_radius_mm": options.start_radius_mm,
+        },
+        "rows": rows.iter().map(|r| json!({
+            "group": r.group,
+            "frames": r.frames,
+            "before": matched(&r.before),
+            "after": matched(&r.after),
+            "unchanged_psnr_db": finite(r.unchanged.psnr_db()),
+        })).collect::<Vec<_>>(),
+        "scored_frames": scored.iter().map(|s| json!({
+            "image": located[s.located].image,
+            "group": located[s.located].group,
+            "window_centre": [located[s.located].pixel.x, located[s.located].pixel.y],
+            "before": {"contact": placed(&s.before.0), "match": matched(&s.before.1)},
+            "after": {"contact": placed(&s.after.0), "match": matched(&s.after.1)},
+            "unchanged_psnr_db": finite(s.unchanged.psnr_db()),
+        })).collect::<Vec<_>>(),
+        "seconds": seconds,
+    })
+}
+
+/// The rows as a Markdown table.
+pub fn table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| group | frames | render, start | render, fitted | composite, start | composite, fitted | no imprint |\n|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
+            r.group,
+            r.frames,
+            r.before.render.psnr_db(),
+            r.after.render.psnr_db(),
+            r.before.composite.psnr_db(),
+            r.after.composite.psnr_db(),
+            r.unchanged.psnr_db()
+        ));
+    }
+    s
+}
+
+/// Writes `out`/sensor.toml, report.json, tables.md and imprints.png, each whole or not at all.
+pub fn write(judged: &Judged, out: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    let path = out.join("sensor.toml");
+    output::write_atomic(&path, judged.sensor_toml.as_bytes())?;
+    files.push(path);
+    let path = out.join("imprints.png");
+    let p = &judged.picture;
+    output::write_png_rgb8(&path, p.width(), p.height(), p.as_raw())?;
+    files.push(path);
+    let path = out.join("tables.md");
+    output::write_atomic(&path, table(&judged.rows).as_bytes())?;
+    files.push(path);
+    let path = out.join("report.json");
+    output::write_json(&path, &judged.report)?;
+    files.push(path);
+    Ok(files)
+}
