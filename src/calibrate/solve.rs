@@ -405,13 +405,9 @@ mod tests {
         ]);
         let sparse = levenberg_marquardt_sweeps(&start, &bounds, 200, &sweeps, residuals);
         let dense = levenberg_marquardt(&start, &bounds, 200, residuals);
-        for k in 0..3 {
-            assert!(
-                (sparse.params[k] - truth[k]).abs() < 1e-6,
-                "{:?}",
-                sparse.params
-            );
-            assert!((sparse.params[k] - dense.params[k]).abs() < 1e-6);
+        for ((s, d), t) in sparse.params.iter().zip(&dense.params).zip(truth) {
+            assert!((s - t).abs() < 1e-6, "{:?}", sparse.params);
+            assert!((s - d).abs() < 1e-6);
         }
         for (a, b) in sparse.jtj.iter().zip(&dense.jtj) {
             assert!(
