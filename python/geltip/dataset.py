@@ -34,7 +34,9 @@ class Dataset(_Base):  # type: ignore[misc,valid-type]
     - ``labels``: the sample's line of `labels.jsonl` (the ground truth of
       `geltip render --labels`, plus the sample's files, object and seed),
     - ``depth``: (H, W) float32 mm, when the set has depth maps,
-    - ``mask``: (H, W) bool, when the set has masks.
+    - ``mask``: (H, W) bool, when the set has masks,
+    - ``reference``: (H, W, 3) uint8, the sample's own empty frame, when the set was put on
+      a folder of backgrounds (`--background DIR`; else the set's is `reference.png`).
 
     ``transform``, if given, is applied to each sample dict.
     """
@@ -87,6 +89,8 @@ class Dataset(_Base):  # type: ignore[misc,valid-type]
             sample["depth"] = np.load(self.root / label["depth"])
         if label.get("mask"):
             sample["mask"] = _load_image(self.root / label["mask"])[..., 0] > 127
+        if label.get("reference"):
+            sample["reference"] = _load_image(self.root / label["reference"])
         return self.transform(sample) if self.transform is not None else sample
 
     def __repr__(self) -> str:

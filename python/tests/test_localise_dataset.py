@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import geltip
+from conftest import write_png
 
 
 @pytest.mark.parametrize(
@@ -107,6 +108,21 @@ def test_dataset_matches_a_render(dataset_dir, sim):
                              azimuth=label["azimuth_deg"], spin=label["spin_deg"],
                              depth=label["depth_mm"])
     np.testing.assert_array_equal(image, geltip.Dataset(dataset_dir)[0]["image"])
+
+
+def test_a_set_on_a_folder_of_backgrounds_gives_each_sample_its_reference(cli, tmp_path):
+    folder = tmp_path / "backgrounds"
+    folder.mkdir()
+    for k in range(2):
+        write_png(folder / f"bg{k}.png", np.full((480, 640, 3), 60 + 90 * k, np.uint8))
+    out = tmp_path / "set"
+    cli("dataset", "--sensor", "paper", "--count", "6", "--seed", "5", "--out", out,
+        "--background", folder)
+    for sample in geltip.Dataset(out):
+        name = sample["labels"]["background"]
+        want = 60 + 90 * int(name[2])
+        assert sample["reference"].shape == (480, 640, 3)
+        assert (sample["reference"] == want).all()
 
 
 def test_dataset_without_labels(tmp_path):

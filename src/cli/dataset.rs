@@ -46,7 +46,9 @@ pub struct DatasetArgs {
     /// Per-sample gain of the tactile change drawn from 1 ± this.
     #[arg(long = "paint-jitter", default_value_t = 0.0)]
     paint_jitter: f64,
-    /// A real sensor's empty frame (same size): images are it plus the rendered change.
+    /// A real sensor's empty frame (same size): images are it plus the rendered change. A
+    /// folder of them (PNG, JPEG): each sample is put on one, drawn from the seed and its
+    /// index; its label names it and its empty frame (references/<name>.png).
     #[arg(long)]
     background: Option<PathBuf>,
     /// Share of samples that are empty frames, labelled with no contact (for counting a

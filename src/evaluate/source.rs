@@ -102,6 +102,9 @@ pub struct DatasetSource {
     pub sensor: Arc<Sensor>,
     /// Each sample's labels and image file, by index.
     entries: Vec<(SampleTruth, PathBuf)>,
+    /// The empty frame of each sample that names its own (a set on a folder of
+    /// backgrounds), by index; the others take the set's.
+    references: BTreeMap<u64, PathBuf>,
 }
 
 impl DatasetSource {
@@ -130,6 +133,7 @@ impl DatasetSource {
         let path = dir.join(LABELS);
         let text = std::fs::read_to_string(&path).map_err(|e| GeltipError::io(&path, e))?;
         let mut entries = Vec::new();
+        let mut references = BTreeMap::new();
         // Each sample's line, so that a sample named twice is refused, not scored twice.
         let mut lines: BTreeMap<u64, usize> = BTreeMap::new();
         for (n, line) in text
@@ -163,6 +167,12 @@ impl DatasetSource {
                 .ok_or_else(|| GeltipError::input(&at, "image: required, a file name"))?;
             let truth = SampleTruth::from_json(&sensor, index, &v, target, &at)?;
             entries.push((truth, dir.join(image)));
+            if let Some(r) = v.get("reference").filter(|r| !r.is_null()) {
+                let r = r
+                    .as_str()
+                    .ok_or_else(|| GeltipError::input(&at, "reference: a file name"))?;
+                references.insert(index, dir.join(r));
+            }
         }
         let expected = samples.map_or(entries.len() as u64, |r| r.end - r.start);
         if entries.len() as u64 != expected {
@@ -179,6 +189,7 @@ impl DatasetSource {
             dir: dir.to_path_buf(),
             sensor,
             entries,
+            references,
         })
     }
 
@@ -201,8 +212,16 @@ impl DatasetSource {
         std::thread::scope(|scope| {
             // Moves the sender in: the reading thread's end closes the channel.
             scope.spawn(move || {
+                let mut own: BTreeMap<&Path, Arc<Picture>> = BTreeMap::new();
                 for (truth, path) in &self.entries {
                     let image = Picture::file(path);
+                    let reference = match self.references.get(&truth.index) {
+                        Some(r) => own
+                            .entry(r.as_path())
+                            .or_insert_with(|| Arc::new(Picture::file(r)))
+                            .clone(),
+                        None => reference.clone(),
+                    };
                     let loaded = match needs {
                         Needs::Pixels => image.rgb(&self.sensor).map(|_| ()),
                         _ if !path.is_file() => Err(GeltipError::input(
@@ -214,7 +233,7 @@ impl DatasetSource {
                     let sample = loaded.map(|()| Sample {
                         truth: truth.clone(),
                         image,
-                        reference: reference.clone(),
+                        reference,
                         sensor: self.sensor.clone(),
                         sensor_file: sensor_file.clone(),
                         rendered: None,

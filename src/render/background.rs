@@ -52,6 +52,87 @@ pub fn load_background(path: &Path, sensor: &Sensor) -> Result<Background> {
     })
 }
 
+/// Backgrounds for a dataset: one image file, or every PNG and JPEG of a folder (sorted by
+/// name; one is drawn per sample). Each has the sensor's size.
+#[derive(Debug, Clone)]
+pub struct Backgrounds {
+    /// Each image's file name.
+    pub names: Vec<String>,
+    pub images: Vec<RgbImage>,
+    /// The file's FNV-1a hash for one file; for a folder, the hash of each name and its
+    /// file's hash in turn.
+    pub fnv1a64: u64,
+}
+
+impl Backgrounds {
+    /// Whether each sample draws its own (a folder of several).
+    pub fn many(&self) -> bool {
+        self.images.len() > 1
+    }
+}
+
+/// The file-name extensions read as images from a folder of backgrounds.
+pub const BACKGROUND_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
+
+/// Loads `path`: an image file ([`load_background`]) or a folder of them. A folder without
+/// images, two of its images whose names differ only by extension, and any image
+/// [`load_background`] refuses are refused on one line naming the file.
+pub fn load_backgrounds(path: &Path, sensor: &Sensor) -> Result<Backgrounds> {
+    if !path.is_dir() {
+        let one = load_background(path, sensor)?;
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        return Ok(Backgrounds {
+            names: vec![name],
+            images: vec![one.image],
+            fnv1a64: one.fnv1a64,
+        });
+    }
+    let mut names: Vec<String> = fs::read_dir(path)
+        .map_err(|e| GeltipError::io(path, e))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| {
+            let ext = n.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase());
+            ext.is_some_and(|e| BACKGROUND_EXTENSIONS.contains(&e.as_str()))
+        })
+        .collect();
+    names.sort();
+    if names.is_empty() {
+        return Err(GeltipError::input(
+            path.display().to_string(),
+            "holds no PNG or JPEG images to use as backgrounds",
+        ));
+    }
+    let mut stems = std::collections::BTreeSet::new();
+    let mut images = Vec::with_capacity(names.len());
+    let mut hash_bytes = Vec::new();
+    for name in &names {
+        if !stems.insert(background_stem(name)) {
+            return Err(GeltipError::input(
+                path.join(name).display().to_string(),
+                "another background has the same name but for its extension",
+            ));
+        }
+        let one = load_background(&path.join(name), sensor)?;
+        hash_bytes.extend(name.as_bytes());
+        hash_bytes.extend(one.fnv1a64.to_le_bytes());
+        images.push(one.image);
+    }
+    Ok(Backgrounds {
+        names,
+        images,
+        fnv1a64: fnv1a64(&hash_bytes),
+    })
+}
+
+/// A background's name without its extension: what its reference in a dataset is named by.
+pub fn background_stem(name: &str) -> &str {
+    name.rsplit_once('.').map_or(name, |(stem, _)| stem)
+}
+
 /// `background` plus the change of `rendered` from `reference` (the empty finger as the same
 /// renderer draws it, noise-free), each value rounded and clamped to 0..=255. Whatever the
 /// renderer added to `rendered` beyond the contact (its sensor noise) is part of the change,

@@ -7,6 +7,7 @@ use super::store::LABELS;
 use super::Split;
 use crate::error::{GeltipError, Result};
 use crate::output::{self, LineLog, PngColor, PngRowCache};
+use crate::render::background::{background_stem, Backgrounds};
 use crate::render::{self, Frame, GroundTruth};
 use serde_json::{json, Value};
 use std::panic::AssertUnwindSafe;
@@ -14,6 +15,18 @@ use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Mutex};
 use std::time::{Duration, Instant};
+
+/// The backgrounds' RGB values (none without backgrounds).
+pub(super) fn rgb_of(backgrounds: Option<&Backgrounds>) -> Vec<Vec<u8>> {
+    backgrounds.map_or_else(Vec::new, |b| {
+        b.images.iter().map(|i| i.as_raw().clone()).collect()
+    })
+}
+
+/// The empty frame, in a set, of the samples put on the background `name`.
+pub fn reference_file(name: &str) -> String {
+    format!("references/{}.png", background_stem(name))
+}
 
 /// One rendered sample on its way to an encoder thread.
 pub(super) struct Job {
@@ -33,6 +46,9 @@ pub(super) struct SampleWriter<'a> {
     /// `None`: encode and discard (measurements).
     out: Option<&'a Path>,
     look: Option<Look>,
+    /// The names of a folder's backgrounds, when each sample draws one: its label names
+    /// it and its empty frame (`references/<stem>.png`).
+    background_names: Option<Vec<String>>,
     /// The empty finger's rows, filtered and compressed once (fast PNG without a look:
     /// a sample's image re-encodes only the rows its contact changed).
     png_rows: Option<PngRowCache>,
@@ -48,14 +64,15 @@ pub(super) struct SampleWriter<'a> {
 
 impl<'a> SampleWriter<'a> {
     /// A writer into `out` for frames rendered against the empty finger `reference`, with
-    /// the loaded `background` (RGB) if any.
+    /// the loaded `backgrounds` if any.
     pub(super) fn new(
         spec: &'a Spec,
         out: Option<&'a Path>,
         reference: &Frame,
-        background: Option<Vec<u8>>,
+        backgrounds: Option<&Backgrounds>,
     ) -> Result<SampleWriter<'a>> {
-        let look = Look::new(spec, reference, background);
+        let look = Look::new(spec, reference, rgb_of(backgrounds));
+        let background_names = backgrounds.filter(|b| b.many()).map(|b| b.names.clone());
         let png_rows = match (spec.png, &look) {
             (PngLevel::Fast, None) => Some(PngRowCache::new(
                 reference.width,
@@ -71,6 +88,7 @@ impl<'a> SampleWriter<'a> {
             spec,
             out,
             look,
+            background_names,
             png_rows,
             digits: (spec.count - 1).to_string().len().max(6),
             labels,
@@ -118,10 +136,14 @@ impl<'a> SampleWriter<'a> {
 
     fn process(&self, job: Job) -> Result<()> {
         let t0 = Instant::now();
-        let look_rgb = self
-            .look
-            .as_ref()
-            .map(|look| look.apply(self.spec.seed, job.k, &job.frame));
+        let seed = self.spec.seed;
+        let (look_rgb, base) = match &self.look {
+            Some(look) => {
+                let base = look.base_of(seed, job.k);
+                (Some(look.apply(seed, job.k, base, &job.frame)), base)
+            }
+            None => (None, 0),
+        };
         let name = format!("{:0width$}", job.k, width = self.digits);
         let image = format!("images/{name}.png");
         let depth = self.spec.depth_maps.then(|| format!("depth/{name}.npy"));
@@ -142,6 +164,10 @@ impl<'a> SampleWriter<'a> {
         };
         if let (Value::Object(l), Value::Object(t)) = (&mut label, truth) {
             l.extend(t);
+            if let Some(names) = &self.background_names {
+                l.insert("background".into(), json!(names[base]));
+                l.insert("reference".into(), json!(reference_file(&names[base])));
+            }
         }
         let line = serde_json::to_string(&label)
             .map_err(|e| GeltipError::input(format!("sample {}", job.k), e.to_string()))?;

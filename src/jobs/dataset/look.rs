@@ -7,7 +7,7 @@
 //! order frames are rendered in, and a per-sample sensor would need a new renderer (1-2 s)
 //! per sample.
 
-use super::sampling::{SampleRng, STREAM_LOOK, STREAM_NOISE};
+use super::sampling::{SampleRng, STREAM_BACKGROUND, STREAM_LOOK, STREAM_NOISE};
 use super::spec::Spec;
 use crate::render::background::{compose, rgb_values};
 use crate::render::Frame;
@@ -18,8 +18,9 @@ use crate::sensor::Noise;
 pub(super) struct Look {
     /// The empty finger as rendered (RGB).
     reference: Vec<u8>,
-    /// What the change is added to: the background, or the reference.
-    base: Vec<u8>,
+    /// What the change is added to: the backgrounds (one drawn per sample when several),
+    /// or the reference.
+    bases: Vec<Vec<u8>>,
     noise: Noise,
     light_jitter: f64,
     paint_jitter: f64,
@@ -27,16 +28,21 @@ pub(super) struct Look {
 
 impl Look {
     /// The post-process `spec` asks for, if any, around the rendered empty finger
-    /// `reference` and the loaded `background` (RGB).
-    pub(super) fn new(spec: &Spec, reference: &Frame, background: Option<Vec<u8>>) -> Option<Look> {
-        let needed = background.is_some()
+    /// `reference` and the loaded `backgrounds` (RGB; none for the rendered finger).
+    pub(super) fn new(spec: &Spec, reference: &Frame, backgrounds: Vec<Vec<u8>>) -> Option<Look> {
+        let needed = !backgrounds.is_empty()
             || spec.noise.any()
             || spec.light_jitter > 0.0
             || spec.paint_jitter > 0.0;
         needed.then(|| {
             let reference = reference.to_rgb().into_raw();
+            let bases = if backgrounds.is_empty() {
+                vec![reference.clone()]
+            } else {
+                backgrounds
+            };
             Look {
-                base: background.unwrap_or_else(|| reference.clone()),
+                bases,
                 reference,
                 noise: spec.noise,
                 light_jitter: spec.light_jitter,
@@ -45,27 +51,36 @@ impl Look {
         })
     }
 
-    /// Sample `k`'s image (RGB) from its rendered frame.
-    pub(super) fn apply(&self, seed: u64, k: u64, frame: &Frame) -> Vec<u8> {
+    /// Which base sample `k` is put on: drawn from `(seed, k)` when there are several.
+    pub(super) fn base_of(&self, seed: u64, k: u64) -> usize {
+        match self.bases.len() {
+            0 | 1 => 0,
+            n => (SampleRng::new(&[seed, k, STREAM_BACKGROUND]).next_u64() % n as u64) as usize,
+        }
+    }
+
+    /// Sample `k`'s image (RGB) from its rendered frame, on base `base` ([`Look::base_of`]).
+    pub(super) fn apply(&self, seed: u64, k: u64, base: usize, frame: &Frame) -> Vec<u8> {
         let mut rng = SampleRng::new(&[seed, k, STREAM_LOOK]);
         let gains: [f64; 3] =
             std::array::from_fn(|_| 1.0 + self.light_jitter * (2.0 * rng.unit() - 1.0));
         let contrast = 1.0 + self.paint_jitter * (2.0 * rng.unit() - 1.0);
         let noise = SampleRng::new(&[seed, k, STREAM_NOISE]);
-        self.compose(rgb_values(frame), gains, contrast, noise)
+        self.compose(base, rgb_values(frame), gains, contrast, noise)
     }
 
-    /// The set's empty frame: the base with the set's noise (drawn from its own stream, as
-    /// no sample's), without jitter.
-    pub(super) fn reference(&self, seed: u64) -> Vec<u8> {
+    /// The empty frame of the samples on base `base`: the base with the set's noise (drawn
+    /// from its own stream, as no sample's), without jitter.
+    pub(super) fn reference(&self, seed: u64, base: usize) -> Vec<u8> {
         let noise = SampleRng::new(&[seed, u64::MAX, STREAM_NOISE]);
-        self.compose(self.reference.iter().copied(), [1.0; 3], 1.0, noise)
+        self.compose(base, self.reference.iter().copied(), [1.0; 3], 1.0, noise)
     }
 
     /// The base plus `contrast` times the change of `rendered` (RGB values) from the empty
     /// finger, times each channel's gain, plus noise.
     fn compose(
         &self,
+        base: usize,
         rendered: impl Iterator<Item = u8>,
         gains: [f64; 3],
         contrast: f64,
@@ -79,12 +94,43 @@ impl Look {
             (sum as f64 - 2.0 * 65535.0) * scale[c]
         };
         compose(
-            &self.base,
+            &self.bases[base],
             rendered,
             &self.reference,
             contrast,
             gains,
             self.noise.any().then_some(draw),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensor::Sensor;
+
+    #[test]
+    fn backgrounds_are_drawn_evenly_and_from_the_seed_and_index_alone() {
+        let sensor = Sensor::preset("paper").unwrap();
+        let spec = Spec::new("paper", sensor, 10, 3);
+        let frame = Frame {
+            width: 1,
+            height: 1,
+            rgba: vec![0; 4],
+            indentation: vec![0.0],
+        };
+        let look = Look::new(&spec, &frame, vec![vec![0; 3]; 3]).unwrap();
+        let mut counts = [0usize; 3];
+        for k in 0..3000 {
+            counts[look.base_of(3, k)] += 1;
+        }
+        assert!(
+            counts.iter().all(|&c| (900..=1100).contains(&c)),
+            "{counts:?}"
+        );
+        assert_eq!(look.base_of(3, 17), look.base_of(3, 17));
+        assert!((0..50).any(|k| look.base_of(3, k) != look.base_of(4, k)));
+        let one = Look::new(&spec, &frame, vec![vec![0; 3]]).unwrap();
+        assert!((0..50).all(|k| one.base_of(3, k) == 0));
     }
 }

@@ -48,7 +48,7 @@ pub use spec::{
 pub use store::{merge, LABELS, MANIFEST};
 
 use crate::error::{GeltipError, Result};
-use crate::render::background::load_background;
+use crate::render::background::load_backgrounds;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
@@ -115,12 +115,12 @@ pub fn run(spec: &Spec, out: Option<&Path>, mut progress: impl FnMut(Progress)) 
             other => other,
         })?;
     }
-    let background = spec
+    let backgrounds = spec
         .background
         .as_ref()
-        .map(|p| load_background(p, &spec.sensor))
+        .map(|p| load_backgrounds(p, &spec.sensor))
         .transpose()?;
-    let options = spec.options_json(background.as_ref().map(|b| b.fnv1a64));
+    let options = spec.options_json(backgrounds.as_ref().map(|b| b.fnv1a64));
 
     let range = spec.shard.range(spec.count);
     let mut report = Report {
@@ -143,7 +143,7 @@ pub fn run(spec: &Spec, out: Option<&Path>, mut progress: impl FnMut(Progress)) 
             spec,
             out,
             &objects,
-            background.map(|b| b.image.into_raw()),
+            backgrounds.as_ref(),
             &todo,
             &mut report,
             &mut progress,

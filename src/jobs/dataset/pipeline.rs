@@ -3,13 +3,13 @@
 //! threads post-process, encode and write the frames.
 
 use super::encode::{Job, SampleWriter};
-use super::reference::{reference_image, REFERENCE};
+use super::reference::write_references;
 use super::sampling::{sample_contact, sample_contacts};
 use super::spec::Spec;
 use super::{Progress, Report, Split};
 use crate::error::{GeltipError, Result};
 use crate::object::Object;
-use crate::output;
+use crate::render::background::Backgrounds;
 use crate::render::gpu::{PreparedBatch, Renderer};
 use crate::render::pool::RenderPool;
 use crate::render::{Frame, GroundTruth};
@@ -35,7 +35,7 @@ pub(super) fn render_samples(
     spec: &Spec,
     out: Option<&Path>,
     objects: &[Arc<Object>],
-    background: Option<Vec<u8>>,
+    backgrounds: Option<&Backgrounds>,
     todo: &[u64],
     report: &mut Report,
     progress: &mut impl FnMut(Progress),
@@ -50,13 +50,9 @@ pub(super) fn render_samples(
     report.startup = start.elapsed();
     let start = Instant::now();
     if let Some(dir) = out {
-        let path = dir.join(REFERENCE);
-        if !path.is_file() {
-            let rgb = reference_image(spec, pool.first().reference(), background.clone());
-            output::write_png_rgb8(path, rgb.width(), rgb.height(), rgb.as_raw())?;
-        }
+        write_references(spec, dir, pool.first().reference(), backgrounds)?;
     }
-    let writer = SampleWriter::new(spec, out, pool.first().reference(), background)?;
+    let writer = SampleWriter::new(spec, out, pool.first().reference(), backgrounds)?;
     let total = todo.len() as u64;
     let mut split = Split::default();
     let (tx, rx) = mpsc::sync_channel::<Job>(2 * pool.batch_frames());

@@ -1,11 +1,13 @@
 //! A set's empty frame (`reference.png`): the empty finger with the set's look (background,
 //! sensor noise; no per-sample jitter), what detectors subtract from the set's images.
 
+use super::encode::{reference_file, rgb_of};
 use super::look::Look;
 use super::spec::Spec;
 use super::store::MANIFEST;
 use crate::error::{GeltipError, Result};
-use crate::render::background::load_background;
+use crate::output;
+use crate::render::background::{load_backgrounds, Backgrounds};
 use crate::render::gpu::Renderer;
 use crate::sensor::{Noise, Sensor};
 use image::RgbImage;
@@ -15,20 +17,54 @@ use std::path::{Path, PathBuf};
 /// The empty frame's file in a set.
 pub const REFERENCE: &str = "reference.png";
 
-/// The set's empty frame, from the rendered empty finger (noise-free) `rendered`.
-pub(super) fn reference_image(
+/// The set's empty frames, from the rendered empty finger (noise-free) `rendered`: one per
+/// background (the first is `reference.png`), or the finger's own.
+pub(super) fn reference_images(
     spec: &Spec,
     rendered: &crate::render::Frame,
-    background: Option<Vec<u8>>,
-) -> RgbImage {
-    match Look::new(spec, rendered, background) {
-        Some(look) => {
-            let rgb = look.reference(spec.seed);
-            RgbImage::from_raw(rendered.width, rendered.height, rgb)
-                .unwrap_or_else(|| rendered.to_rgb())
-        }
-        None => rendered.to_rgb(),
+    backgrounds: Vec<Vec<u8>>,
+) -> Vec<RgbImage> {
+    let count = backgrounds.len().max(1);
+    match Look::new(spec, rendered, backgrounds) {
+        Some(look) => (0..count)
+            .map(|base| {
+                let rgb = look.reference(spec.seed, base);
+                RgbImage::from_raw(rendered.width, rendered.height, rgb)
+                    .unwrap_or_else(|| rendered.to_rgb())
+            })
+            .collect(),
+        None => vec![rendered.to_rgb()],
     }
+}
+
+/// Writes the set's empty frames into `dir` where missing: `reference.png` and, when each
+/// sample draws one of several backgrounds, `references/<stem>.png` for each.
+pub(super) fn write_references(
+    spec: &Spec,
+    dir: &Path,
+    rendered: &crate::render::Frame,
+    backgrounds: Option<&Backgrounds>,
+) -> Result<()> {
+    let mut wanted = vec![dir.join(REFERENCE)];
+    if let Some(b) = backgrounds.filter(|b| b.many()) {
+        wanted.extend(b.names.iter().map(|n| dir.join(reference_file(n))));
+    }
+    if wanted.iter().all(|p| p.is_file()) {
+        return Ok(());
+    }
+    let images = reference_images(spec, rendered, rgb_of(backgrounds));
+    if wanted.len() > 1 {
+        let folder = dir.join("references");
+        std::fs::create_dir_all(&folder).map_err(|e| GeltipError::io(&folder, e))?;
+    }
+    for (k, path) in wanted.iter().enumerate() {
+        // reference.png is the first background's.
+        let img = &images[k.saturating_sub(1)];
+        if !path.is_file() {
+            output::write_png_rgb8(path, img.width(), img.height(), img.as_raw())?;
+        }
+    }
+    Ok(())
 }
 
 /// The empty frame of the set in `dir`, rendered from its `dataset.json`: for a set that
@@ -53,12 +89,13 @@ pub fn reference_of_set(dir: &Path) -> Result<RgbImage> {
     spec.light_jitter = number("light_jitter");
     spec.paint_jitter = number("paint_jitter");
     spec.background = o["background"]["path"].as_str().map(PathBuf::from);
-    let background = spec
+    let backgrounds = spec
         .background
         .as_ref()
-        .map(|p| load_background(p, &sensor).map(|b| b.image.into_raw()))
+        .map(|p| load_backgrounds(p, &sensor))
         .transpose()?;
     let mut renderer = Renderer::new(&sensor)?;
     let rendered = renderer.render_empty()?;
-    Ok(reference_image(&spec, &rendered, background))
+    let first: Vec<Vec<u8>> = rgb_of(backgrounds.as_ref()).into_iter().take(1).collect();
+    Ok(reference_images(&spec, &rendered, first).remove(0))
 }

@@ -30,6 +30,8 @@ pub(super) const STREAM_LOOK: u64 = 2;
 pub(super) const STREAM_NOISE: u64 = 3;
 /// Whether a sample is empty and how many contacts it holds.
 const STREAM_LAYOUT: u64 = 4;
+/// Which of a folder's backgrounds a sample is put on.
+pub(super) const STREAM_BACKGROUND: u64 = 5;
 
 impl SampleRng {
     pub fn new(parts: &[u64]) -> SampleRng {

@@ -237,11 +237,14 @@ pub fn merge(out: &Path, shards: &[PathBuf], command: &[String]) -> Result<u64> 
         output::link_or_copy_atomic(&reference, out.join(REFERENCE))?;
     }
     let mut merged = BTreeMap::new();
+    // A background's empty frame is shared by many samples: copied once.
+    let mut references = std::collections::BTreeSet::new();
     for (k, (dir, line)) in set.lines {
         let v: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
-        for key in ["image", "depth", "mask"] {
+        for key in ["image", "depth", "mask", "reference"] {
             if let Some(rel) = v[key].as_str() {
-                if dir.as_path() != out {
+                let first = key != "reference" || references.insert(rel.to_string());
+                if dir.as_path() != out && first {
                     output::link_or_copy_atomic(dir.join(rel), out.join(rel))?;
                 }
             }
