@@ -218,3 +218,85 @@ fn folders_without_fitting_images_are_refused_on_one_line() {
         assert!(!out.join("labels.jsonl").exists());
     }
 }
+
+/// `--drift`: where the contact changes nothing each image is its empty frame with its light
+/// drifted (smoothly: neighbouring pixels move alike), differently per sample and the same
+/// run after run; the empty frame itself is not drifted; out of range refused.
+#[test]
+fn drift_moves_the_light_smoothly_and_reproducibly() {
+    let run = |name: &str, drift: &str| {
+        let out = temp_in("backgrounds-drift", name);
+        dataset(&out, None, &["--drift", drift]);
+        out
+    };
+    let (a, b, none) = (run("a", "1"), run("b", "1"), run("none", "0"));
+    let reference = load(&a.join("reference.png"));
+    assert_eq!(reference, load(&none.join("reference.png")));
+    let mut means = Vec::new();
+    for (((la, lb), ln), k) in labels(&a)
+        .iter()
+        .zip(labels(&b))
+        .zip(labels(&none))
+        .zip(0..)
+    {
+        let file = |dir: &Path, l: &Value, key: &str| load(&dir.join(l[key].as_str().unwrap()));
+        let (img, again, plain) = (
+            file(&a, la, "image"),
+            file(&b, &lb, "image"),
+            file(&none, &ln, "image"),
+        );
+        assert_eq!(img, again, "sample {k} differs between runs");
+        let (mut sum, mut n, mut rough) = (0.0, 0usize, 0usize);
+        for y in 0..480 {
+            for x in 0..639 {
+                let (p, q) = (reference.get_pixel(x, y), reference.get_pixel(x + 1, y));
+                // Where the contact changed nothing: the drifted image is the empty frame
+                // with its light drifted.
+                if plain.get_pixel(x, y) != p || plain.get_pixel(x + 1, y) != q {
+                    continue;
+                }
+                for c in 0..3 {
+                    let (r0, r1) = (p[c] as f64, q[c] as f64);
+                    if !(40.0..=215.0).contains(&r0) || !(40.0..=215.0).contains(&r1) {
+                        continue;
+                    }
+                    let (v0, v1) = (
+                        img.get_pixel(x, y)[c] as f64,
+                        img.get_pixel(x + 1, y)[c] as f64,
+                    );
+                    sum += (v0 - r0).abs();
+                    n += 1;
+                    // Rounding moves a value by half a level: the ratio of neighbours agrees
+                    // within that.
+                    if ((v0 - r0) - (v1 - r1)).abs() > 3.0 {
+                        rough += 1;
+                    }
+                }
+            }
+        }
+        assert!(n > 10_000, "{n}");
+        assert!(
+            rough * 100 < n,
+            "sample {k}: {rough} of {n} neighbours disagree"
+        );
+        means.push(sum / n as f64);
+    }
+    assert!(means.iter().all(|&m| m > 0.5), "{means:?}");
+    assert!(
+        means.iter().any(|&m| (m - means[0]).abs() > 0.5),
+        "{means:?}"
+    );
+    let (code, _, err) = geltip(&[
+        "dataset",
+        "--sensor",
+        "paper",
+        "--count",
+        "2",
+        "--drift",
+        "1.5",
+        "--out",
+        s(&temp_in("backgrounds-drift", "bad")),
+    ]);
+    assert_ne!(code, 0);
+    assert!(error_line(&err).contains("--drift"), "{err}");
+}

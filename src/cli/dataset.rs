@@ -46,6 +46,11 @@ pub struct DatasetArgs {
     /// Per-sample gain of the tactile change drawn from 1 ± this.
     #[arg(long = "paint-jitter", default_value_t = 0.0)]
     paint_jitter: f64,
+    /// How far each image's light drifts from its empty frame's, as a real sensor's LEDs
+    /// do (0 to 1; 1: a sector's channel up to 40% brighter or darker, each channel's gain
+    /// 1 ± 12%, offsets up to ± 5 levels): for detectors that must not call drift a contact.
+    #[arg(long, default_value_t = 0.0)]
+    drift: f64,
     /// A real sensor's empty frame (same size): images are it plus the rendered change. A
     /// folder of them (PNG, JPEG): each sample is put on one, drawn from the seed and its
     /// index; its label names it and its empty frame (references/<name>.png).
@@ -130,6 +135,7 @@ impl DatasetArgs {
             .map_or(spec.sensor.config.render.noise, Noise::from);
         spec.light_jitter = self.light_jitter;
         spec.paint_jitter = self.paint_jitter;
+        spec.drift = self.drift;
         spec.background = self.background;
         spec.empty_fraction = self.empty_fraction;
         if let Some(c) = self.contacts_per_sample {

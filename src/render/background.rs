@@ -184,13 +184,31 @@ pub fn compose<N: FnMut(usize) -> f64>(
     reference: &[u8],
     contrast: f64,
     gains: [f64; 3],
+    noise: Option<N>,
+) -> Vec<u8> {
+    compose_drifted(base, rendered, reference, contrast, gains, noise, None)
+}
+
+/// [`compose`] with the light drifted before the noise: value `i` (pixel `i / 3`, channel
+/// `i % 3`) becomes `v * gain + offset` for `drift(i) = [gain, offset]`.
+pub fn compose_drifted<N: FnMut(usize) -> f64>(
+    base: &[u8],
+    rendered: impl Iterator<Item = u8>,
+    reference: &[u8],
+    contrast: f64,
+    gains: [f64; 3],
     mut noise: Option<N>,
+    drift: Option<&dyn Fn(usize) -> [f64; 2]>,
 ) -> Vec<u8> {
     let mut out = Vec::with_capacity(base.len());
     for ((value, &base), &reference) in rendered.zip(base).zip(reference) {
         let c = out.len() % 3;
         let change = value as f64 - reference as f64;
         let mut v = (base as f64 + contrast * change) * gains[c];
+        if let Some(drift) = drift {
+            let [gain, offset] = drift(out.len());
+            v = v * gain + offset;
+        }
         if let Some(noise) = noise.as_mut() {
             v += noise(c);
         }

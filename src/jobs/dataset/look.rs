@@ -7,9 +7,9 @@
 //! order frames are rendered in, and a per-sample sensor would need a new renderer (1-2 s)
 //! per sample.
 
-use super::sampling::{SampleRng, STREAM_BACKGROUND, STREAM_LOOK, STREAM_NOISE};
+use super::sampling::{SampleRng, STREAM_BACKGROUND, STREAM_DRIFT, STREAM_LOOK, STREAM_NOISE};
 use super::spec::Spec;
-use crate::render::background::{compose, rgb_values};
+use crate::render::background::{compose_drifted, rgb_values};
 use crate::render::Frame;
 use crate::sensor::Noise;
 
@@ -24,6 +24,54 @@ pub(super) struct Look {
     noise: Noise,
     light_jitter: f64,
     paint_jitter: f64,
+    drift: f64,
+    /// Each pixel's azimuth about the principal point (radians), for the drift's sector.
+    azimuths: Vec<f32>,
+}
+
+/// One sample's drift ([`Spec::drift`]): per channel a gain and an offset (levels), and a
+/// sector of one channel mix brightened or dimmed about an azimuth.
+struct Drift {
+    gains: [f64; 3],
+    offsets: [f64; 3],
+    centre: f64,
+    width: f64,
+    amplitude: [f64; 3],
+}
+
+impl Drift {
+    fn draw(seed: u64, k: u64, strength: f64) -> Drift {
+        let mut rng = SampleRng::new(&[seed, k, STREAM_DRIFT]);
+        let mut sym = |scale: f64| strength * scale * (2.0 * rng.unit() - 1.0);
+        let gains = [1.0 + sym(0.12), 1.0 + sym(0.12), 1.0 + sym(0.12)];
+        let offsets = [sym(5.0), sym(5.0), sym(5.0)];
+        let bump = sym(0.4);
+        let centre = rng.uniform(0.0, std::f64::consts::TAU);
+        let width = rng.uniform(0.3, 1.2);
+        // Mostly one channel (one colour of LED), a little of the others.
+        let main = (rng.unit() * 3.0) as usize % 3;
+        let amplitude =
+            std::array::from_fn(|c| bump * if c == main { 1.0 } else { 0.3 * rng.unit() });
+        Drift {
+            gains,
+            offsets,
+            centre,
+            width,
+            amplitude,
+        }
+    }
+
+    /// Gain and offset of value `i` whose pixel lies at `azimuth`.
+    fn at(&self, i: usize, azimuth: f64) -> [f64; 2] {
+        let c = i % 3;
+        let d = (azimuth - self.centre + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        let bump = (-(d / self.width).powi(2)).exp();
+        [
+            self.gains[c] * (1.0 + self.amplitude[c] * bump),
+            self.offsets[c],
+        ]
+    }
 }
 
 impl Look {
@@ -33,7 +81,9 @@ impl Look {
         let needed = !backgrounds.is_empty()
             || spec.noise.any()
             || spec.light_jitter > 0.0
-            || spec.paint_jitter > 0.0;
+            || spec.paint_jitter > 0.0
+            || spec.drift > 0.0;
+        let w = reference.width;
         needed.then(|| {
             let reference = reference.to_rgb().into_raw();
             let bases = if backgrounds.is_empty() {
@@ -42,11 +92,23 @@ impl Look {
                 backgrounds
             };
             Look {
-                bases,
                 reference,
                 noise: spec.noise,
                 light_jitter: spec.light_jitter,
                 paint_jitter: spec.paint_jitter,
+                drift: spec.drift,
+                azimuths: if spec.drift > 0.0 {
+                    let p = spec.sensor.principal;
+                    (0..bases[0].len() / 3)
+                        .map(|i| {
+                            let (x, y) = ((i as u32 % w) as f64, (i as u32 / w) as f64);
+                            (y - p.y).atan2(x - p.x) as f32
+                        })
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+                bases,
             }
         })
     }
@@ -66,14 +128,26 @@ impl Look {
             std::array::from_fn(|_| 1.0 + self.light_jitter * (2.0 * rng.unit() - 1.0));
         let contrast = 1.0 + self.paint_jitter * (2.0 * rng.unit() - 1.0);
         let noise = SampleRng::new(&[seed, k, STREAM_NOISE]);
-        self.compose(base, rgb_values(frame), gains, contrast, noise)
+        let drift = (self.drift > 0.0).then(|| Drift::draw(seed, k, self.drift));
+        let field = drift
+            .as_ref()
+            .map(|d| move |i: usize| d.at(i, self.azimuths[i / 3] as f64));
+        let field = field.as_ref().map(|f| f as &dyn Fn(usize) -> [f64; 2]);
+        self.compose(base, rgb_values(frame), gains, contrast, noise, field)
     }
 
     /// The empty frame of the samples on base `base`: the base with the set's noise (drawn
     /// from its own stream, as no sample's), without jitter.
     pub(super) fn reference(&self, seed: u64, base: usize) -> Vec<u8> {
         let noise = SampleRng::new(&[seed, u64::MAX, STREAM_NOISE]);
-        self.compose(base, self.reference.iter().copied(), [1.0; 3], 1.0, noise)
+        self.compose(
+            base,
+            self.reference.iter().copied(),
+            [1.0; 3],
+            1.0,
+            noise,
+            None,
+        )
     }
 
     /// The base plus `contrast` times the change of `rendered` (RGB values) from the empty
@@ -85,6 +159,7 @@ impl Look {
         gains: [f64; 3],
         contrast: f64,
         mut noise: SampleRng,
+        drift: Option<&dyn Fn(usize) -> [f64; 2]>,
     ) -> Vec<u8> {
         // Approximately Gaussian: the sum of four 16-bit uniforms, scaled to unit variance.
         let scale = self.noise.rgb().map(|s| s * 3.0_f64.sqrt() / 65536.0);
@@ -93,13 +168,14 @@ impl Look {
             let sum = (r & 0xffff) + ((r >> 16) & 0xffff) + ((r >> 32) & 0xffff) + (r >> 48);
             (sum as f64 - 2.0 * 65535.0) * scale[c]
         };
-        compose(
+        compose_drifted(
             &self.bases[base],
             rendered,
             &self.reference,
             contrast,
             gains,
             self.noise.any().then_some(draw),
+            drift,
         )
     }
 }

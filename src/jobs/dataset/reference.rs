@@ -88,6 +88,7 @@ pub fn reference_of_set(dir: &Path) -> Result<RgbImage> {
     spec.noise = serde_json::from_value(o["noise"].clone()).unwrap_or(Noise::NONE);
     spec.light_jitter = number("light_jitter");
     spec.paint_jitter = number("paint_jitter");
+    spec.drift = number("drift");
     spec.background = o["background"]["path"].as_str().map(PathBuf::from);
     let backgrounds = spec
         .background

@@ -32,6 +32,8 @@ pub(super) const STREAM_NOISE: u64 = 3;
 const STREAM_LAYOUT: u64 = 4;
 /// Which of a folder's backgrounds a sample is put on.
 pub(super) const STREAM_BACKGROUND: u64 = 5;
+/// How a sample's light drifts from its empty frame's.
+pub(super) const STREAM_DRIFT: u64 = 6;
 
 impl SampleRng {
     pub fn new(parts: &[u64]) -> SampleRng {

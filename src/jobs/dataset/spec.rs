@@ -146,6 +146,10 @@ pub struct Spec {
     pub paint_jitter: f64,
     /// A real sensor's empty frame: each image is this plus the rendered change.
     pub background: Option<PathBuf>,
+    /// How far each image's light drifts from its empty frame's, as a real sensor's LEDs do
+    /// between two moments (0: none; 1: a sector's channel up to 40% brighter or darker,
+    /// each channel's gain 1 ± 12%, an offset up to ± 5 levels).
+    pub drift: f64,
     /// Share of samples that are empty frames (labelled, no contact: what false positives
     /// are counted on).
     pub empty_fraction: f64,
@@ -177,6 +181,7 @@ impl Spec {
             masks: false,
             noise: Noise::NONE,
             light_jitter: 0.0,
+            drift: 0.0,
             paint_jitter: 0.0,
             background: None,
             empty_fraction: 0.0,
@@ -239,6 +244,7 @@ impl Spec {
             ("noise", noise[2], 255.0),
             ("light_jitter", self.light_jitter, 1.0),
             ("paint_jitter", self.paint_jitter, 1.0),
+            ("drift", self.drift, 1.0 + 1e-9),
         ] {
             if !v.is_finite() || v < 0.0 || v >= max {
                 return Err(GeltipError::option(
@@ -264,6 +270,9 @@ impl Spec {
         if let Value::Object(o) = &mut options {
             if self.empty_fraction > 0.0 {
                 o.insert("empty_fraction".into(), json!(self.empty_fraction));
+            }
+            if self.drift > 0.0 {
+                o.insert("drift".into(), json!(self.drift));
             }
             if self.contacts_per_sample != (1, 1) {
                 let (a, b) = self.contacts_per_sample;
