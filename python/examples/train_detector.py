@@ -5,9 +5,10 @@
 
 The sim-to-real check: `geltip dataset` renders contacts on the calibrated `allsight`
 sensor; each render's change from the empty finger is put on a real no-contact frame (the
-t = 0 frames of the real set, one chosen per sample from its index), through JPEG, with
-drift between frame and reference like a real sensor's (a sector of LEDs brightening, a
-sub-pixel shift and a tiny turn, gain and offset, noise). A small CNN learns contact / no
+t = 0 frames of the real set, one chosen per sample from its index), through JPEG. Its
+reference is that frame or, half the time, another no-contact frame of the same session
+(the real LEDs' drift between two moments); drift like a real sensor's is added besides (a
+sector of LEDs brightening, a sub-pixel shift and a tiny turn, gain and offset, noise). A small CNN learns contact / no
 contact and the contact's pixel from (frame, reference, difference). No real contact frame
 is used for training. The real frames are then scored by `geltip.evaluate` (the same
 protocol as `geltip evaluate --real`), and the predictions are written so that
@@ -86,6 +87,17 @@ def background_of(k, count, seed):
     return zlib.crc32(f"{seed}:{k}".encode()) % count
 
 
+def reference_of(k, b, sessions, seed):
+    """Sample k's reference: half the time its own background (drift is then drawn), half
+    another no-contact frame of the same session, so the LEDs' real drift between two
+    moments sits between frame and reference. From (seed, k) alone."""
+    h = zlib.crc32(f"{seed}:{k}:reference".encode())
+    same = [i for i, s in enumerate(sessions) if s == sessions[b] and i != b]
+    if h % 2 == 0 or not same:
+        return b
+    return same[(h // 2) % len(same)]
+
+
 # Set by the pool's initializer: each worker's copy of what composing needs.
 _WORK = {}
 
@@ -128,15 +140,18 @@ def render_set(args, out):
 
 
 def real_backgrounds(real):
-    """The real set's no-contact frames (each press's t = 0 frame, the sessions' first)."""
-    names = sorted(p.name for p in real.iterdir() if p.name.endswith(("_0.jpg", "_ref_frame.jpg")))
+    """The real set's no-contact frames taken as each press starts (its t = 0 frames). The
+    sessions' first frames are left out: the drift-only pairs scored are t = 0 frames
+    against them, so no pair scored is ever a training pair."""
+    names = sorted(p.name for p in real.iterdir() if p.name.endswith("_0.jpg"))
     if not names:
-        sys.exit(f"error: {real}: no no-contact frames (*_0.jpg, *_ref_frame.jpg)")
+        sys.exit(f"error: {real}: no no-contact frames (*_0.jpg)")
     return names
 
 
 def build_training_set(args, out, real):
-    """Frames (N, 3, h, w) float16, their background index, label (pixel or none)."""
+    """Frames (N, 3, h, w) float16, their reference's index among the backgrounds (their own
+    background or another of its session), label (pixel or none)."""
     root = render_set(args, out)
     ds = geltip.Dataset(root)
     names = real_backgrounds(real)
@@ -162,7 +177,8 @@ def build_training_set(args, out, real):
     print(f"composed {len(done)} training frames on {len(names)} real backgrounds "
           f"in {time.time() - t:.0f} s", flush=True)
     frames = torch.from_numpy(np.stack([d[0] for d in done]).astype(np.float16))
-    which = torch.tensor([d[1] for d in done])
+    sessions = [n.split("_")[0] for n in names]
+    which = torch.tensor([reference_of(j[0], d[1], sessions, args.seed) for j, d in zip(jobs, done)])
     refs = torch.from_numpy(np.stack([shrink(b) for b in backgrounds]).astype(np.float16))
     has = torch.tensor([p is not None for p in pixels])
     px = torch.tensor([p if p is not None else [0.0, 0.0] for p in pixels], dtype=torch.float32)
