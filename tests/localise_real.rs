@@ -116,9 +116,10 @@ fn real_contacts_are_found_at_their_azimuth() {
     assert!(median <= 25.0, "median {median:.1} px");
 }
 
-/// `geltip localise --threshold`: a drift-only pair that the default method (`change`) calls
-/// no contact becomes one with the threshold low enough; a threshold for another method, or
-/// one that is not a positive number, is refused on one line.
+/// `geltip localise --threshold` and `--noise`: a drift-only pair that the default method
+/// (`change`) calls no contact becomes one with the threshold low enough, and none again
+/// when the sensor's noise is said to be larger than the pair shows; either option for
+/// another method, or one that is not a positive number, is refused on one line.
 #[test]
 fn the_threshold_is_an_option() {
     let Some(dir) = allsight() else { return };
@@ -140,6 +141,9 @@ fn the_threshold_is_an_option() {
     let (code, out, _) = call(&["--threshold", "5"]);
     assert_eq!(code, 0);
     assert!(out.contains("\"detected\":true"), "{out}");
+    let (code, out, _) = call(&["--threshold", "5", "--noise", "40"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("\"detected\":false"), "{out}");
     for (extra, says) in [
         (
             &["--method", "surface", "--threshold", "5"][..],
@@ -149,6 +153,11 @@ fn the_threshold_is_an_option() {
             &["--method", "change", "--threshold=-1"][..],
             "--threshold: must be greater than 0",
         ),
+        (
+            &["--method", "paper", "--noise", "3"][..],
+            "--noise: applies to method 'change', not 'paper'",
+        ),
+        (&["--noise", "0"][..], "--noise: must be greater than 0"),
     ] {
         let (code, _, err) = call(extra);
         assert_ne!(code, 0);

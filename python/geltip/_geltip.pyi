@@ -181,11 +181,13 @@ def localise(
     image: _Image,
     method: str = "change",
     threshold: Optional[float] = None,
+    noise: Optional[float] = None,
 ) -> Dict[str, Any]:
     """Finds the contact: {"detected", "pixel", "point", "region", "confidence",
     "regions_found", "note"}, as `geltip localise` prints. method: "change" (real and
     rendered frames), "surface" (rendered frames) or "paper"; threshold: the change method's decision threshold in
-    noise spreads (default 20), as `--threshold`."""
+    noise spreads (default 20), as `--threshold`; noise: the sensor's noise in 8-bit levels
+    (default 1; each pair's own estimate where larger), as `--noise`."""
 
 def load_image(path: _Path) -> _Image:
     """Reads an image file (PNG) as (H, W, 3) uint8."""
@@ -216,6 +218,7 @@ def evaluate(
     compare: Optional[_Path] = None,
     real: Optional[_Path] = None,
     threshold: Optional[float] = None,
+    noise: Optional[float] = None,
 ) -> Dict[str, Any]:
     """The native half of `geltip.evaluate`: `detector` answers each frame with its
     detections as JSON text (or names a built-in localiser). Returns {"summary", "tables",

@@ -91,6 +91,7 @@ def evaluate(
     compare: Optional[Union[str, PathLike]] = None,
     real: Optional[Union[str, PathLike]] = None,
     threshold: Optional[float] = None,
+    noise: Optional[float] = None,
 ) -> EvaluationReport:
     """Scores ``detector`` on a set from ``geltip dataset`` (``dataset=``), a suite
     rendered on the fly (``suite="paper"`` or ``"stability"``, with ``sensor=``), or a real
@@ -102,7 +103,8 @@ def evaluate(
     detections: dicts with ``"pixel": [u, v]`` or ``"point": [x, y, z]`` (mm, camera
     frame) and an optional ``"confidence"``. ``"surface"``, ``"paper"`` or ``"change"`` names a
     built-in localiser instead (``threshold``: the change method's decision threshold, in
-    noise spreads). Detections are matched one to one to the visible
+    noise spreads; ``noise``: the sensor's noise in 8-bit levels, a floor under each pair's
+    own estimate). Detections are matched one to one to the visible
     contacts within ``gate_mm`` (None: any distance). With ``out``, the report's files
     (summary.json, per_sample.jsonl, tables.md, charts) are written there, beside
     ``compare``'s (another run's output directory). An exception the detector raises
@@ -129,6 +131,7 @@ def evaluate(
         compare=compare,
         real=real,
         threshold=threshold,
+        noise=noise,
     )
     return EvaluationReport(
         summary=r["summary"], tables=r["tables"], per_sample=r.get("per_sample", []),

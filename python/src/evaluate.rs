@@ -10,6 +10,7 @@ use geltip::evaluate::{
     detections::detections_from_json, Detector, Found, MethodDetector, Named, Sample,
 };
 use geltip::jobs::evaluate as job;
+use geltip::localise::change::ChangeOptions;
 use geltip::localise::Method;
 use geltip::GeltipError;
 use numpy::{PyArray, PyArrayMethods};
@@ -88,14 +89,14 @@ impl Detector for PyDetector {
 }
 
 /// Scores `detector` (a function `(image, reference, sensor) -> JSON text`, or "surface",
-/// "paper" or "change", whose decision `threshold` may be given) on a dataset's directory or
+/// "paper" or "change", whose decision `threshold` and `noise` may be given) on a dataset's directory or
 /// a suite ("paper", "stability", with `sensor`), with the matching gate `gate_mm` (None:
 /// any distance), or on a real sensor's labelled frames (`real`: a set file or the AllSight
 /// labels.json, with the `sensor` that took them). With `out`, the report's files go there,
 /// beside `compare`'s (another run's output directory). Returns {"summary", "tables",
 /// "per_sample", "files"} ({"summary", "tables", "files"} for real frames).
 #[pyfunction]
-#[pyo3(signature = (detector, *, dataset = None, suite = None, sensor = None, out = None, gate_mm = Some(3.0), name = None, compare = None, real = None, threshold = None))]
+#[pyo3(signature = (detector, *, dataset = None, suite = None, sensor = None, out = None, gate_mm = Some(3.0), name = None, compare = None, real = None, threshold = None, noise = None))]
 #[allow(clippy::too_many_arguments)] // The keyword arguments of geltip.evaluate, one each.
 pub fn evaluate<'py>(
     py: Python<'py>,
@@ -109,7 +110,9 @@ pub fn evaluate<'py>(
     compare: Option<&Bound<'py, PyAny>>,
     real: Option<&Bound<'py, PyAny>>,
     threshold: Option<f64>,
+    noise: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let options = ChangeOptions { threshold, noise };
     let path = |field: &str, v: Option<&Bound<'py, PyAny>>| -> PyResult<Option<PathBuf>> {
         v.map(|v| path_or_str(field, v).map(PathBuf::from))
             .transpose()
@@ -130,9 +133,14 @@ pub fn evaluate<'py>(
             GeltipError::InvalidInput { reason, .. } => bad("detector", reason),
             other => to_py(other),
         })?;
-        Box::new(lib(MethodDetector::with_threshold(method, threshold))?)
-    } else if threshold.is_some() {
-        return Err(bad("threshold", "applies to the method 'change'"));
+        Box::new(lib(MethodDetector::with_options(method, options))?)
+    } else if options.any() {
+        let name = if threshold.is_some() {
+            "threshold"
+        } else {
+            "noise"
+        };
+        return Err(bad(name, "applies to the method 'change'"));
     } else if detector.is_callable() {
         Box::new(PyDetector {
             function: detector.clone().unbind(),

@@ -4,16 +4,17 @@
 use crate::convert::{json_to_py, path_or_str, rgb_image};
 use crate::errors::{detached, lib};
 use crate::sensor::Sensor;
+use geltip::localise::change::ChangeOptions;
 use geltip::localise::Method;
 use numpy::{PyArray, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 
 /// Finds the contact in `image` against `reference` (both (H, W, 3) uint8 of the sensor's
 /// size): `{"detected", "pixel", "point", "region", "confidence", "regions_found", "note"}`,
-/// as `geltip localise` prints. `threshold`: the change method's decision threshold (as
-/// `--threshold`).
+/// as `geltip localise` prints. `threshold` and `noise`: the change method's decision
+/// threshold and the sensor's noise (as `--threshold` and `--noise`).
 #[pyfunction]
-#[pyo3(signature = (sensor, reference, image, method = "change", threshold = None))]
+#[pyo3(signature = (sensor, reference, image, method = "change", threshold = None, noise = None))]
 pub fn localise<'py>(
     py: Python<'py>,
     sensor: &Bound<'py, Sensor>,
@@ -21,14 +22,16 @@ pub fn localise<'py>(
     image: &Bound<'py, PyAny>,
     method: &str,
     threshold: Option<f64>,
+    noise: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = sensor.get();
+    let options = ChangeOptions { threshold, noise };
     let method = lib(Method::from_name(method))?;
     let reference = rgb_image("reference", reference)?;
     let image = rgb_image("image", image)?;
     let detection = detached(py, "localising", || {
         s.localiser
-            .localise_with(&reference, &image, method, threshold)
+            .localise_with(&reference, &image, method, &options)
     })?;
     json_to_py(py, &detection.to_json())
 }

@@ -147,17 +147,21 @@ REAL = Path(__file__).resolve().parents[2] / ".." / "shared" / "real" / "allsigh
 
 def test_real_frames_and_the_change_threshold(tmp_path):
     """Real labelled frames (../shared/real, skipped where absent): a drift-only pair is no
-    contact for the change method, a contact at threshold 0.5; a threshold for another
-    method is refused."""
+    contact for the change method, a contact at threshold 0.5, none again when the noise is
+    said to be far larger; a threshold or noise for another method is refused."""
     with pytest.raises(ValueError, match="threshold"):
         geltip.evaluate("surface", suite="paper", sensor="paper", threshold=5)
+    with pytest.raises(ValueError, match="^noise"):
+        geltip.evaluate("paper", suite="paper", sensor="paper", noise=3)
+    with pytest.raises(ValueError, match="^noise: applies to the method 'change'"):
+        geltip.evaluate(lambda *_: [], suite="paper", sensor="paper", noise=3)
     if not REAL.is_dir():
         pytest.skip(f"{REAL} is absent (real sensor frames)")
     line = {"image": str(REAL / "s1_image2_0.03_0.jpg"),
             "reference": str(REAL / "s1_ref_frame.jpg"), "contact": False, "group": "drift"}
     (tmp_path / "set.jsonl").write_text(json.dumps(line) + "\n")
-    for threshold, false_contacts in ((None, 0), (0.5, 1)):
+    for threshold, noise, false_contacts in ((None, None, 0), (0.5, None, 1), (0.5, 200, 0)):
         report = geltip.evaluate("change", real=tmp_path / "set.jsonl", sensor="allsight",
-                                 threshold=threshold, out=tmp_path / "out")
+                                 threshold=threshold, noise=noise, out=tmp_path / "out")
         assert report.summary["rows"][-1]["false_contacts"] == false_contacts, report.tables
         assert "summary.json" in report.files

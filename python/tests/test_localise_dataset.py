@@ -43,6 +43,17 @@ def test_localise_matches_cli(sim, sensor, cli, tmp_path):
         assert got == printed, method
 
 
+def test_the_noise_option_raises_the_bar(sim, sensor):
+    """A rendered contact stands out of a noise-free pair; said to come from a sensor far
+    noisier than the pair shows, it no longer does."""
+    reference = sim.reference()
+    image, _, _ = sim.render(object="sphere", at="rotation=40", depth=0.5)
+    assert geltip.localise(sensor, reference, image)["detected"] is True
+    assert geltip.localise(sensor, reference, image, noise=2.0)["detected"] is True
+    found = geltip.localise(sensor, reference, image, noise=200.0)
+    assert found["detected"] is False and "no change stands out" in found["note"]
+
+
 def test_no_contact_is_a_result(sim, sensor):
     reference = sim.reference()
     found = geltip.localise(sensor, reference, reference.copy())
@@ -67,6 +78,10 @@ def test_localise_bad_arguments(sim, sensor):
         geltip.localise(sensor, reference, reference, method="surface", threshold=5.0)
     with pytest.raises(ValueError, match="^threshold: must be greater than 0"):
         geltip.localise(sensor, reference, reference, method="change", threshold=0.0)
+    with pytest.raises(ValueError, match="^noise: applies to method 'change'"):
+        geltip.localise(sensor, reference, reference, method="surface", noise=2.0)
+    with pytest.raises(ValueError, match="^noise: must be a finite number"):
+        geltip.localise(sensor, reference, reference, noise=float("nan"))
     # A non-contiguous view is accepted.
     flipped = np.ascontiguousarray(reference[::-1])[::-1]
     assert geltip.localise(sensor, reference, flipped)["detected"] is False

@@ -6,6 +6,7 @@ use anyhow::{bail, Result};
 use clap::{ArgGroup, Args};
 use geltip::evaluate::{CommandDetector, Detector, MethodDetector, Named, Predictions};
 use geltip::jobs::evaluate::{self, SUITES};
+use geltip::localise::change::ChangeOptions;
 use geltip::localise::Method;
 use geltip::sensor::Sensor;
 use std::path::PathBuf;
@@ -47,6 +48,10 @@ pub struct EvaluateArgs {
     /// fainter contacts and calls more drift a contact.
     #[arg(long, requires = "method")]
     threshold: Option<f64>,
+    /// The change method's noise floor: the sensor's noise in 8-bit levels (default 1); each
+    /// pair's own estimate is used where larger.
+    #[arg(long, requires = "method")]
+    noise: Option<f64>,
     /// Directory for summary.json, per_sample.jsonl, tables.md and the charts.
     #[arg(long)]
     out: PathBuf,
@@ -109,9 +114,12 @@ fn detector(args: &EvaluateArgs, sensor: &Sensor) -> Result<Box<dyn Detector>> {
             Duration::from_secs_f64(args.timeout_s),
         )?),
         (_, _, Some(method)) => Box::new(
-            MethodDetector::with_threshold(
+            MethodDetector::with_options(
                 Method::from_name(method).map_err(|e| anyhow::anyhow!("--{e}"))?,
-                args.threshold,
+                ChangeOptions {
+                    threshold: args.threshold,
+                    noise: args.noise,
+                },
             )
             .map_err(|e| anyhow::anyhow!("--{e}"))?,
         ),

@@ -3,6 +3,7 @@
 use super::under_flags;
 use anyhow::Result;
 use clap::Args;
+use geltip::localise::change::ChangeOptions;
 use geltip::localise::{load_frame, Localiser, Method};
 use geltip::sensor::Sensor;
 use std::path::PathBuf;
@@ -25,6 +26,11 @@ pub struct LocaliseArgs {
     /// more drift a contact).
     #[arg(long)]
     threshold: Option<f64>,
+    /// The change method: the sensor's noise, standard deviation in 8-bit levels (default
+    /// 1); the pair's own estimate is used where larger. Raise it for a noisier camera than
+    /// the pair shows.
+    #[arg(long)]
+    noise: Option<f64>,
     /// The image with the contact (PNG or JPEG).
     image: PathBuf,
 }
@@ -36,8 +42,16 @@ pub fn localise(args: LocaliseArgs) -> Result<()> {
     let reference = load_frame(&sensor, &args.reference)?;
     let frame = load_frame(&sensor, &args.image)?;
     let detection = Localiser::new(&sensor)
-        .localise_with(&reference, &frame, method, args.threshold)
-        .map_err(under_flags(&[("threshold", "--threshold")]))?;
+        .localise_with(
+            &reference,
+            &frame,
+            method,
+            &ChangeOptions {
+                threshold: args.threshold,
+                noise: args.noise,
+            },
+        )
+        .map_err(under_flags(&[]))?;
     println!("{}", detection.to_json());
     Ok(())
 }

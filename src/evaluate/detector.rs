@@ -5,6 +5,7 @@
 use super::detections::{parse_line, Found};
 use super::{Detector, Needs, Sample};
 use crate::error::{GeltipError, Result};
+use crate::localise::change::ChangeOptions;
 use crate::localise::{Localiser, Method};
 use crate::sensor::Sensor;
 use rayon::prelude::*;
@@ -20,8 +21,8 @@ use std::time::{Duration, Instant};
 /// built once per sensor.
 pub struct MethodDetector {
     method: Method,
-    /// The change method's decision threshold, when not its default.
-    threshold: Option<f64>,
+    /// The change method's options, where not its defaults.
+    options: ChangeOptions,
     localisers: Vec<Localiser>,
 }
 
@@ -29,17 +30,17 @@ impl MethodDetector {
     pub fn new(method: Method) -> MethodDetector {
         MethodDetector {
             method,
-            threshold: None,
+            options: ChangeOptions::default(),
             localisers: Vec::new(),
         }
     }
 
-    /// The method with the change method's decision `threshold` (in noise spreads); refused
-    /// for another method, or unless finite and > 0.
-    pub fn with_threshold(method: Method, threshold: Option<f64>) -> Result<MethodDetector> {
-        crate::localise::change_config(method, threshold)?;
+    /// The method with the change method's `options` (its decision threshold, the sensor's
+    /// noise); refused for another method, or unless each is finite and > 0.
+    pub fn with_options(method: Method, options: ChangeOptions) -> Result<MethodDetector> {
+        crate::localise::change_config(method, &options)?;
         Ok(MethodDetector {
-            threshold,
+            options,
             ..MethodDetector::new(method)
         })
     }
@@ -54,7 +55,7 @@ impl MethodDetector {
             .ok_or_else(|| GeltipError::input("evaluate", "no localiser for the frame's sensor"))?;
         let reference = sample.reference.rgb(sensor)?;
         let image = sample.image.rgb(sensor)?;
-        let d = localiser.localise_with(reference, image, self.method, self.threshold)?;
+        let d = localiser.localise_with(reference, image, self.method, &self.options)?;
         Ok(Found::from_detection(&d))
     }
 
@@ -78,9 +79,9 @@ impl MethodDetector {
 
 impl Detector for MethodDetector {
     fn name(&self) -> String {
-        match self.threshold {
-            Some(t) => format!("{} (threshold {t})", self.method.name()),
-            None => self.method.name().to_string(),
+        match self.options.any() {
+            true => format!("{} ({})", self.method.name(), self.options.describe()),
+            false => self.method.name().to_string(),
         }
     }
 

@@ -85,12 +85,57 @@ impl Default for ChangeConfig {
 impl ChangeConfig {
     /// The defaults with the decision threshold at `threshold` spreads (finite, > 0).
     pub fn with_threshold(threshold: f64) -> crate::error::Result<ChangeConfig> {
-        crate::checks::positive(threshold)
-            .map_err(|reason| crate::error::GeltipError::option("threshold", reason))?;
-        Ok(ChangeConfig {
-            score_threshold: threshold,
-            ..ChangeConfig::default()
-        })
+        ChangeOptions {
+            threshold: Some(threshold),
+            noise: None,
+        }
+        .config()
+    }
+}
+
+/// What a user may set of the change method: its decision threshold and the sensor's noise.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ChangeOptions {
+    /// How many noise spreads the strongest change must stand out (default 20).
+    pub threshold: Option<f64>,
+    /// The sensor's noise, standard deviation in 8-bit levels: the noise the pair is
+    /// credited with is its own estimate or this, whichever is larger (default 1).
+    pub noise: Option<f64>,
+}
+
+impl ChangeOptions {
+    /// Whether anything is set.
+    pub fn any(&self) -> bool {
+        self.threshold.is_some() || self.noise.is_some()
+    }
+
+    /// The defaults with what is set; each value must be finite and > 0 (the error names
+    /// the option).
+    pub fn config(&self) -> crate::error::Result<ChangeConfig> {
+        let mut c = ChangeConfig::default();
+        for (name, value, slot) in [
+            ("threshold", self.threshold, &mut c.score_threshold),
+            ("noise", self.noise, &mut c.noise_floor),
+        ] {
+            if let Some(v) = value {
+                crate::checks::positive(v)
+                    .map_err(|reason| crate::error::GeltipError::option(name, reason))?;
+                *slot = v;
+            }
+        }
+        Ok(c)
+    }
+
+    /// How reports name the settings: "threshold 12, noise 3", or "" for none.
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(t) = self.threshold {
+            parts.push(format!("threshold {t}"));
+        }
+        if let Some(n) = self.noise {
+            parts.push(format!("noise {n}"));
+        }
+        parts.join(", ")
     }
 }
 

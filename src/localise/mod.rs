@@ -288,16 +288,17 @@ impl Localiser {
         }
     }
 
-    /// [`Localiser::localise`] with the change method's decision `threshold` when given (in
-    /// noise spreads, finite and > 0); a threshold for another method is an error.
+    /// [`Localiser::localise`] with the change method's `options` (its decision threshold
+    /// in noise spreads and the sensor's noise in levels, each finite and > 0); an option
+    /// for another method is an error.
     pub fn localise_with(
         &self,
         reference: &RgbImage,
         frame: &RgbImage,
         method: Method,
-        threshold: Option<f64>,
+        options: &change::ChangeOptions,
     ) -> Result<Detection> {
-        match change_config(method, threshold)? {
+        match change_config(method, options)? {
             None => self.localise(reference, frame, method),
             Some(config) => self.localise_change(reference, frame, &config),
         }
@@ -363,19 +364,25 @@ pub fn localise(
     Localiser::new(sensor).localise(reference, frame, method)
 }
 
-/// The change method's constants for a decision `threshold` given with `method` (none
-/// without one); a threshold for another method, or one not finite and > 0, is an error
-/// naming the option.
+/// The change method's constants for `options` given with `method` (none without any); an
+/// option for another method, or a value not finite and > 0, is an error naming the option.
 pub fn change_config(
     method: Method,
-    threshold: Option<f64>,
+    options: &change::ChangeOptions,
 ) -> Result<Option<change::ChangeConfig>> {
-    match threshold {
-        None => Ok(None),
-        Some(_) if method != Method::Change => Err(GeltipError::option(
-            "threshold",
-            format!("applies to method 'change', not '{method}'"),
-        )),
-        Some(t) => change::ChangeConfig::with_threshold(t).map(Some),
+    if !options.any() {
+        return Ok(None);
     }
+    if method != Method::Change {
+        let name = if options.threshold.is_some() {
+            "threshold"
+        } else {
+            "noise"
+        };
+        return Err(GeltipError::option(
+            name,
+            format!("applies to method 'change', not '{method}'"),
+        ));
+    }
+    options.config().map(Some)
 }
