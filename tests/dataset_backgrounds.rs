@@ -56,7 +56,8 @@ fn backgrounds(dir: &Path) -> Vec<String> {
 
 const COUNT: &str = "12";
 
-fn dataset(out: &Path, background: Option<&Path>, extra: &[&str]) {
+/// Runs `geltip dataset` (paper, COUNT samples, seed 3) into `out`; returns its stdout.
+fn dataset(out: &Path, background: Option<&Path>, extra: &[&str]) -> String {
     let mut args = vec![
         "dataset",
         "--sensor",
@@ -72,7 +73,7 @@ fn dataset(out: &Path, background: Option<&Path>, extra: &[&str]) {
         args.extend(["--background", s(b)]);
     }
     args.extend(extra);
-    ok(&args);
+    ok(&args)
 }
 
 #[test]
@@ -117,19 +118,7 @@ fn each_sample_is_put_on_a_drawn_background_and_scored_against_it() {
     assert_eq!(load(&on.join("reference.png")), load(&folder.join("a.png")));
 
     // A second run keeps every sample.
-    let out = ok(&[
-        "dataset",
-        "--sensor",
-        "paper",
-        "--count",
-        COUNT,
-        "--seed",
-        "3",
-        "--background",
-        s(&folder),
-        "--out",
-        s(&on),
-    ]);
+    let out = dataset(&on, Some(&folder), &[]);
     assert!(out.contains("\"rendered\":0"), "{out}");
 
     // Scored against each sample's own empty frame, the set scores as the plain one does:

@@ -13,7 +13,7 @@ use super::fit::soft_l1;
 use super::solve::{levenberg_marquardt, levenberg_marquardt_sweeps, Bound, Fit, Sweeps};
 use super::{AtBound, Value};
 use crate::error::{GeltipError, Result};
-use crate::evaluate::real::RealSet;
+use crate::evaluate::real::{azimuth_error_deg, RealSet};
 use crate::finger::SurfaceCoord;
 use crate::localise::{Localiser, Method};
 use crate::object::{Object, Primitive};
@@ -158,9 +158,7 @@ pub fn locate(
                 return skip(d.note.unwrap_or_else(|| "no contact found".into()));
             };
             if let (Some(az), Some(centre)) = (f.label.azimuth_deg, f.label.centre) {
-                let at = (pixel - centre).y.atan2((pixel - centre).x).to_degrees();
-                let off = (at - az).rem_euclid(360.0);
-                let off = off.min(360.0 - off);
+                let off = azimuth_error_deg(pixel, centre, az);
                 if off > LABEL_AGREEMENT_DEG {
                     return skip(format!(
                         "found {off:.0} deg from the labelled azimuth (more than {LABEL_AGREEMENT_DEG})"
@@ -407,26 +405,25 @@ impl Placed {
 
 /// A sensor and its empty finger, rendered by the CPU mirror once: the look's values do not
 /// change the empty finger.
-struct Stage {
+struct Stage<'a> {
     sensor: Sensor,
     grid: HeightfieldGrid,
-    reference: Frame,
+    reference: &'a Frame,
 }
 
-impl Stage {
-    fn new(config: SensorConfig, reference: &Frame) -> Result<Stage> {
-        let sensor = Sensor::from_config("imprint", config)?;
-        Ok(Stage {
+impl<'a> Stage<'a> {
+    fn new(sensor: Sensor, reference: &'a Frame) -> Stage<'a> {
+        Stage {
             grid: HeightfieldGrid::for_sensor(&sensor),
             sensor,
-            reference: reference.clone(),
-        })
+            reference,
+        }
     }
 
     /// The rendered change over `located`'s window less the real one, damped as the light
     /// fit damps its residuals.
     fn residuals(&self, located: &Located, real: &[f64], press: &Press) -> Result<Vec<f64>> {
-        let frame = cpu::render_contact(&self.sensor, &self.grid, &self.reference, press)?;
+        let frame = cpu::render_contact(&self.sensor, &self.grid, self.reference, press)?;
         Ok(located
             .window
             .iter()
@@ -533,8 +530,8 @@ pub fn fit(
     let renders = std::sync::atomic::AtomicUsize::new(0);
     let total = real.iter().map(Vec::len).sum::<usize>();
     let residuals = |p: &[f64]| -> Vec<f64> {
-        let stage = match Stage::new(set_look(&sensor.config, p), &reference) {
-            Ok(s) => s,
+        let stage = match Sensor::from_config("imprint", set_look(&sensor.config, p)) {
+            Ok(s) => Stage::new(s, &reference),
             Err(e) => {
                 errors.keep(e);
                 return vec![f64::INFINITY; total];
@@ -625,24 +622,8 @@ pub fn fit(
     })
 }
 
-/// Where `located`'s contact is under `config`'s look with a sphere of `radius` mm: its
-/// depth and place fitted, the look held.
-pub fn place(
-    config: &SensorConfig,
-    radius: f64,
-    located: &Located,
-    iterations: usize,
-) -> Result<Placed> {
-    let sensor = Sensor::from_config("imprint", config.clone())?;
-    let reference = cpu::render(&sensor, None)?.frame;
-    place_on(
-        &Stage::new(config.clone(), &reference)?,
-        radius,
-        located,
-        iterations,
-    )
-}
-
+/// Where `located`'s contact is on `stage` with a sphere of `radius` mm: its depth and place
+/// fitted, the look held.
 fn place_on(stage: &Stage, radius: f64, located: &Located, iterations: usize) -> Result<Placed> {
     let real = located.change();
     let errors = Errors::new();
@@ -660,7 +641,8 @@ fn place_on(stage: &Stage, radius: f64, located: &Located, iterations: usize) ->
     Ok(Placed::of(located, &fit.params))
 }
 
-/// Each of `located[chosen]` placed under `config`'s look ([`place`]), in parallel.
+/// Each of `located[chosen]` placed under `config`'s look with a sphere of `radius` mm (its
+/// depth and place fitted, the look held), in parallel.
 pub fn place_all(
     config: &SensorConfig,
     radius: f64,
@@ -670,7 +652,7 @@ pub fn place_all(
 ) -> Result<Vec<Placed>> {
     let sensor = Sensor::from_config("imprint", config.clone())?;
     let reference = cpu::render(&sensor, None)?.frame;
-    let stage = Stage::new(config.clone(), &reference)?;
+    let stage = Stage::new(sensor, &reference);
     chosen
         .par_iter()
         .map(|&k| place_on(&stage, radius, &located[k], iterations))

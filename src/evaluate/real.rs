@@ -394,6 +394,13 @@ fn angle_between(a: f64, b: f64) -> f64 {
     d.min(360.0 - d)
 }
 
+/// How far (degrees, 0 to 180) `pixel`'s direction from `centre` is from `azimuth_deg`
+/// (0 = +x, 90 = +y): what "at the labelled azimuth" is judged by.
+pub fn azimuth_error_deg(pixel: DVec2, centre: DVec2, azimuth_deg: f64) -> f64 {
+    let d = pixel - centre;
+    angle_between(d.y.atan2(d.x).to_degrees(), azimuth_deg)
+}
+
 /// Scores `found` (a frame's detections) against `frame`'s label.
 pub fn score_frame(sensor: &Sensor, frame: &RealFrame, found: &[Found]) -> RealScore {
     let best = found
@@ -418,9 +425,7 @@ pub fn score_frame(sensor: &Sensor, frame: &RealFrame, found: &[Found]) -> RealS
             sensor.width as f64 / 2.0,
             sensor.height as f64 / 2.0,
         ));
-        let d = p - c;
-        let seen = d.y.atan2(d.x).to_degrees();
-        score.azimuth_error_deg = Some(angle_between(seen, azimuth));
+        score.azimuth_error_deg = Some(azimuth_error_deg(p, c, azimuth));
     }
     score.point_error_mm = point.zip(l.point_mm).map(|(a, b)| a.distance(b));
     if let Some(region) = &l.region {

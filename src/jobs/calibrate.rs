@@ -137,17 +137,21 @@ pub fn sensor_toml(config: &SensorConfig) -> Result<String> {
 /// The calibrated render less the real frame, at twice the difference about mid grey:
 /// grey where they agree, brighter where the render is brighter.
 fn residual_image(render: &image::RgbImage, real: &image::RgbImage) -> image::RgbImage {
-    let raw = render
-        .as_raw()
+    let raw = residual_values(render.as_raw(), real.as_raw());
+    image::RgbImage::from_raw(render.width(), render.height(), raw).expect("same size")
+}
+
+/// `render` less `real`, value by value, at twice the difference about mid grey.
+pub(crate) fn residual_values(render: &[u8], real: &[u8]) -> Vec<u8> {
+    render
         .iter()
-        .zip(real.as_raw())
+        .zip(real)
         .map(|(&a, &b)| {
             (128.0 + 2.0 * (a as f64 - b as f64))
                 .round()
                 .clamp(0.0, 255.0) as u8
         })
-        .collect();
-    image::RgbImage::from_raw(render.width(), render.height(), raw).expect("same size")
+        .collect()
 }
 
 /// Images of one size set left to right.

@@ -2,11 +2,12 @@
 //! ([`crate::calibrate::imprint`]), judged on other contact frames of the same set by the GPU
 //! renderer, and written with its report and a picture.
 
-use super::calibrate::sensor_toml;
+use super::calibrate::{residual_values, sensor_toml};
 use crate::calibrate::imprint::{self, ImprintFit, ImprintOptions, Located, Placed, Skipped};
 use crate::error::{GeltipError, Result};
 use crate::evaluate::real::RealSet;
 use crate::output;
+use crate::render::background::compose;
 use crate::render::gpu::Renderer;
 use crate::sensor::Sensor;
 use serde_json::{json, Value};
@@ -140,23 +141,22 @@ pub fn judge(
         &scored_ids,
         place_steps,
     )?;
-    let mut start_renderer = Renderer::new(start)?;
-    let mut fitted_renderer = Renderer::new(&fitted)?;
+    let mut start_look = Look::new(start)?;
+    let mut fitted_look = Look::new(&fitted)?;
     let mut scored = Vec::new();
-    let mut tiles: Vec<(String, [Vec<u8>; 4])> = Vec::new();
+    let mut tiles: Vec<Tile> = Vec::new();
     for ((&k, b), a) in scored_ids.iter().zip(before_places).zip(after_places) {
         let l = &located[k];
-        let (before, before_img) = judge_look(&mut start_renderer, l, &b, options.start_radius_mm)?;
-        let (after, after_img) = judge_look(&mut fitted_renderer, l, &a, fit.radius_mm)?;
+        let (before, before_img) = start_look.judge(l, &b, options.start_radius_mm)?;
+        let (after, after_img) = fitted_look.judge(l, &a, fit.radius_mm)?;
         let unchanged = squares(&l.reference, &l.frame, &l.window);
-        if !tiles.iter().any(|(g, _)| *g == l.group) {
-            let real = l.frame.clone();
-            let residual: Vec<u8> = after_img
-                .iter()
-                .zip(&real)
-                .map(|(&a, &r)| (128.0 + 2.0 * (a as f64 - r as f64)).clamp(0.0, 255.0) as u8)
-                .collect();
-            tiles.push((l.group.clone(), [real, after_img, residual, before_img]));
+        if !tiles.iter().any(|t| t.group == l.group) {
+            let residual = residual_values(&after_img, &l.frame);
+            tiles.push(Tile {
+                group: l.group.clone(),
+                pixel: l.pixel,
+                images: [l.frame.clone(), after_img, residual, before_img],
+            });
         }
         scored.push(Scored {
             located: k,
@@ -166,7 +166,7 @@ pub fn judge(
         });
     }
     let rows = rows(&located, &scored);
-    let picture = picture(start, &located, &scored, &tiles, options.window_px);
+    let picture = picture(start, &tiles, options.window_px);
     let seconds = started.elapsed().as_secs_f64();
     let report = report_json(
         start, set_path, options, &fit, &located, &skipped, &scored, &rows, seconds,
@@ -184,30 +184,48 @@ pub fn judge(
     })
 }
 
-/// Renders `placed` with `renderer`'s sensor and compares it inside `l`'s window; also
-/// returns the composite (the real reference plus the rendered change) as a full image.
-fn judge_look(
-    renderer: &mut Renderer,
-    l: &Located,
-    placed: &Placed,
-    radius: f64,
-) -> Result<(Match, Vec<u8>)> {
-    let (frame, _) = renderer.render(&placed.press(radius))?;
-    let render = frame.to_rgb().into_raw();
-    let empty = renderer.reference().to_rgb().into_raw();
-    let composite: Vec<u8> = l
-        .reference
-        .iter()
-        .zip(render.iter().zip(&empty))
-        .map(|(&r, (&a, &e))| (r as f64 + a as f64 - e as f64).round().clamp(0.0, 255.0) as u8)
-        .collect();
-    Ok((
-        Match {
-            render: squares(&render, &l.frame, &l.window),
-            composite: squares(&composite, &l.frame, &l.window),
-        },
-        composite,
-    ))
+/// A look to judge: its sensor's GPU renderer and empty finger (RGB).
+struct Look {
+    renderer: Renderer,
+    empty: Vec<u8>,
+}
+
+impl Look {
+    fn new(sensor: &Sensor) -> Result<Look> {
+        let renderer = Renderer::new(sensor)?;
+        let empty = renderer.reference().to_rgb().into_raw();
+        Ok(Look { renderer, empty })
+    }
+
+    /// Renders `placed` and compares it inside `l`'s window; also returns the composite
+    /// (the real reference plus the rendered change, as `dataset --background` makes it)
+    /// as a full image.
+    fn judge(&mut self, l: &Located, placed: &Placed, radius: f64) -> Result<(Match, Vec<u8>)> {
+        let (frame, _) = self.renderer.render(&placed.press(radius))?;
+        let render = frame.to_rgb().into_raw();
+        let composite = compose(
+            &l.reference,
+            render.iter().copied(),
+            &self.empty,
+            1.0,
+            [1.0; 3],
+            None::<fn(usize) -> f64>,
+        );
+        Ok((
+            Match {
+                render: squares(&render, &l.frame, &l.window),
+                composite: squares(&composite, &l.frame, &l.window),
+            },
+            composite,
+        ))
+    }
+}
+
+/// A group's row of the picture: its first scored frame's window centre and images.
+struct Tile {
+    group: String,
+    pixel: glam::DVec2,
+    images: [Vec<u8>; 4],
 }
 
 fn squares(a: &[u8], b: &[u8], window: &[usize]) -> Squares {
@@ -254,13 +272,7 @@ fn rows(located: &[Located], scored: &[Scored]) -> Vec<Row> {
 
 /// Per group, a row of four windows (2x): the real frame, the fitted look composited on the
 /// real reference, their difference (twice, about grey), the start look composited.
-fn picture(
-    sensor: &Sensor,
-    located: &[Located],
-    scored: &[Scored],
-    tiles: &[(String, [Vec<u8>; 4])],
-    window_px: f64,
-) -> image::RgbImage {
+fn picture(sensor: &Sensor, tiles: &[Tile], window_px: f64) -> image::RgbImage {
     let half = window_px.ceil() as i64;
     let side = (2 * half + 1) as u32;
     let scale = 2;
@@ -272,14 +284,12 @@ fn picture(
     );
     let w = sensor.width as i64;
     let h = sensor.height as i64;
-    for (row, (group, images)) in tiles.iter().enumerate() {
-        let l = scored
-            .iter()
-            .map(|s| &located[s.located])
-            .find(|l| l.group == *group)
-            .expect("a tile's frame was scored");
-        let (cx, cy) = (l.pixel.x.round() as i64, l.pixel.y.round() as i64);
-        for (col, img) in images.iter().enumerate() {
+    for (row, tile_of) in tiles.iter().enumerate() {
+        let (cx, cy) = (
+            tile_of.pixel.x.round() as i64,
+            tile_of.pixel.y.round() as i64,
+        );
+        for (col, img) in tile_of.images.iter().enumerate() {
             for dy in -half..=half {
                 for dx in -half..=half {
                     let (x, y) = (cx + dx, cy + dy);
