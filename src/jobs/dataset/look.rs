@@ -61,12 +61,15 @@ impl Drift {
         }
     }
 
-    /// Gain and offset of value `i` whose pixel lies at `azimuth`.
-    fn at(&self, i: usize, azimuth: f64) -> [f64; 2] {
-        let c = i % 3;
+    /// The sector's weight (0..1) at a pixel's `azimuth`.
+    fn bump(&self, azimuth: f64) -> f64 {
         let d = (azimuth - self.centre + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
             - std::f64::consts::PI;
-        let bump = (-(d / self.width).powi(2)).exp();
+        (-(d / self.width).powi(2)).exp()
+    }
+
+    /// Gain and offset of channel `c` at a pixel of sector weight `bump`.
+    fn at(&self, c: usize, bump: f64) -> [f64; 2] {
         [
             self.gains[c] * (1.0 + self.amplitude[c] * bump),
             self.offsets[c],
@@ -129,9 +132,13 @@ impl Look {
         let contrast = 1.0 + self.paint_jitter * (2.0 * rng.unit() - 1.0);
         let noise = SampleRng::new(&[seed, k, STREAM_NOISE]);
         let drift = (self.drift > 0.0).then(|| Drift::draw(seed, k, self.drift));
+        // The sector's weight once a pixel, not once a value.
+        let bumps: Vec<f64> = drift.as_ref().map_or_else(Vec::new, |d| {
+            self.azimuths.iter().map(|&a| d.bump(a as f64)).collect()
+        });
         let field = drift
             .as_ref()
-            .map(|d| move |i: usize| d.at(i, self.azimuths[i / 3] as f64));
+            .map(|d| move |i: usize| d.at(i % 3, bumps[i / 3]));
         let field = field.as_ref().map(|f| f as &dyn Fn(usize) -> [f64; 2]);
         self.compose(base, rgb_values(frame), gains, contrast, noise, field)
     }
