@@ -104,6 +104,22 @@ impl Lens {
         Some(theta.min(self.max_theta))
     }
 
+    /// Unit direction (camera frame, z the axis) of the ray that lands at `offset` px from
+    /// the principal point, or `None` beyond the field of view.
+    pub fn ray(&self, offset: glam::DVec2) -> Option<glam::DVec3> {
+        let rho = offset.length();
+        let theta = self.unproject(rho)?;
+        if rho == 0.0 {
+            return Some(glam::DVec3::Z);
+        }
+        let (sin_t, cos_t) = theta.sin_cos();
+        Some(glam::DVec3::new(
+            sin_t * offset.x / rho,
+            sin_t * offset.y / rho,
+            cos_t,
+        ))
+    }
+
     /// Safeguarded Newton on rho(theta) = rho over [0, max_theta], where rho is increasing.
     fn unproject_polynomial(&self, rho: f64) -> f64 {
         let (mut lo, mut hi) = (0.0, self.max_theta);

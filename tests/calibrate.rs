@@ -126,6 +126,50 @@ fn a_hidden_lens_and_light_come_back() -> Result<()> {
     Ok(())
 }
 
+/// A camera whose software cuts the picture to a circle of its own: the lens's principal
+/// point 6 px right of and 5 px above the mask's centre and its focal length 7% shorter
+/// than the field of view the mask implies. `--fit lens,principal,focal,light` finds both;
+/// the plain lens fit, which takes the circle for the lens's edge, is off by both.
+#[test]
+fn a_lens_behind_a_mask_comes_back() -> Result<()> {
+    let dir = tempdir("masked")?;
+    let plain = hidden_sensor().config;
+    let mut c = plain.clone();
+    c.image.circle = Some([320.0, 240.0, 236.0]);
+    c.lens.cx = 326.0;
+    c.lens.cy = 235.0;
+    c.lens.fov_deg = 200.0;
+    let start = Sensor::preset("paper")?;
+    // The focal length that puts the start's field of view on the mask, less 7%.
+    let implied = 236.0 / (start.lens.max_rho() / start.lens.focal_px);
+    c.lens.focal_px = 0.93 * implied;
+    let hidden = Sensor::from_config("masked", c)?;
+    let frames = empty_frames(&hidden, 1, &dir)?;
+    let mut options = quick(start.clone(), frames);
+    options.fit = calibrate::FitSet::parse("lens,principal,focal,light")?;
+    let c = calibrate::calibrate(&options, &|_| {})?;
+    let lens = &c.config.lens;
+    let truth = &hidden.config.lens;
+    let centre = (lens.cx - truth.cx).hypot(lens.cy - truth.cy);
+    let focal = lens.focal_px / truth.focal_px - 1.0;
+    let fitted = Sensor::from_config("fitted", c.config.clone())?;
+    let after = psnr_against(&fitted, &c.empty, &c.circle);
+    eprintln!(
+        "principal ({:.2}, {:.2}) (truth ({}, {})), focal {:.2} (truth {:.2}), mask {:?}, {after:.2} dB",
+        lens.cx, lens.cy, truth.cx, truth.cy, lens.focal_px, truth.focal_px, c.config.image.circle
+    );
+    assert!(centre < 1.0, "principal point {centre:.2} px off");
+    assert!(focal.abs() < 0.01, "focal length {:.2}% off", 100.0 * focal);
+    assert!(after >= 35.0, "re-rendered PSNR {after:.2} dB");
+    let mask = c.config.image.circle.expect("the circle held as the mask");
+    assert!((mask[0] - 320.0).hypot(mask[1] - 240.0) < 1.0 && (mask[2] - 236.0).abs() < 1.0);
+    // What the plain lens fit assumes is off by both: the mask's centre and the focal
+    // length its edge implies.
+    assert!((320.0 - truth.cx).hypot(240.0 - truth.cy) > 1.0);
+    assert!((implied / truth.focal_px - 1.0).abs() > 0.01);
+    Ok(())
+}
+
 fn tempdir(name: &str) -> Result<PathBuf> {
     let dir = std::env::temp_dir().join(format!("geltip-calibrate-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);

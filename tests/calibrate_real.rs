@@ -72,15 +72,20 @@ fn allsight_first_frames_reach_28_db_with_the_geometry_held() -> Result<()> {
 }
 
 /// The GelTip's empty frame from the `paper` preset: the image circle within 2 px of the
-/// authors' mask (radius 240 at (320, 240)), the finger held, and the light as the README
-/// reports it.
+/// authors' mask (radius 240 at (320, 240)), the finger held, and 33 dB inside the circle
+/// (within the quicker sample's spread) with the lens's principal point and focal length
+/// fitted to the light.
 #[test]
 fn geltip_empty_frame_with_the_geometry_held() -> Result<()> {
     let Some(dir) = real("geltip") else {
         return Ok(());
     };
     let start = Sensor::preset("paper")?;
-    let c = calibrate::calibrate(&quick(start.clone(), dir.join("empty.png")), &|_| {})?;
+    // The authors' circle is a mask: the lens's principal point and focal length are fitted
+    // to the light, the finger held.
+    let mut options = quick(start.clone(), dir.join("empty.png"));
+    options.fit = FitSet::parse("lens,principal,focal,light")?;
+    let c = calibrate::calibrate(&options, &|_| {})?;
     let centre = &c.circle.centre;
     assert!(
         (centre.x - 320.0).hypot(centre.y - 240.0) < 2.0 && (c.circle.radius - 240.0).abs() < 2.0,
@@ -95,9 +100,15 @@ fn geltip_empty_frame_with_the_geometry_held() -> Result<()> {
         "GelTip: {before:.2} -> {after:.2} dB, at bounds {:?}",
         c.at_bounds
     );
+    // The command's full sample reaches 33.0 dB (README); this quicker sample 32.98.
     assert!(
-        after >= 30.0 && before < 15.0,
+        after >= 32.8 && before < 15.0,
         "{before:.2} -> {after:.2} dB"
+    );
+    // The mask stays where the frame cuts its picture; the lens moved inside it.
+    assert_eq!(
+        c.config.image.circle,
+        Some([c.circle.centre.x, c.circle.centre.y, c.circle.radius])
     );
     Ok(())
 }

@@ -357,3 +357,36 @@ fn a_thick_gel_gets_a_drape_of_its_thickness() {
         .to_string();
     assert!(err.contains("elastomer.drape_mm"), "{err}");
 }
+
+/// An image circle cut by the camera (`image.circle`): loaded and written back the same,
+/// and refused on one line naming the field when it is not a circle on the image.
+#[test]
+fn an_image_circle_mask_loads_round_trips_and_is_refused_by_field() {
+    let text = paper_toml().replace("[image]\n", "[image]\ncircle = [318.5, 241.0, 230.0]\n");
+    let c = SensorConfig::from_toml(&text, "masked").unwrap();
+    assert_eq!(c.image.circle, Some([318.5, 241.0, 230.0]));
+    let written = toml::to_string(&c).unwrap();
+    assert_eq!(SensorConfig::from_toml(&written, "x").unwrap(), c);
+    // Without one, nothing is written: the presets' files stay as they were.
+    let plain = common::paper_config();
+    assert!(!toml::to_string(&plain).unwrap().contains("circle"));
+
+    for (circle, field) in [
+        ([f64::NAN, 240.0, 200.0], "image.circle[0]"),
+        ([320.0, f64::INFINITY, 200.0], "image.circle[1]"),
+        ([320.0, 240.0, 0.0], "image.circle[2]"),
+        ([320.0, 240.0, -5.0], "image.circle[2]"),
+        (
+            [-1.0, 240.0, 200.0],
+            "image.circle: centre (-1, 240) is outside the image",
+        ),
+        (
+            [320.0, 481.0, 200.0],
+            "image.circle: centre (320, 481) is outside the image",
+        ),
+    ] {
+        let mut bad = plain.clone();
+        bad.image.circle = Some(circle);
+        assert_refused(bad, field);
+    }
+}

@@ -146,6 +146,36 @@ fn gpu_matches_the_cpu_pipeline_under_a_calibrated_light() {
     )));
 }
 
+/// An image circle the camera cuts apart from the lens (`image.circle`: a mask off the
+/// principal point, inside what the lens sees) and vignetting measured over it: the GPU
+/// against the CPU mirror, black outside the mask and lit inside it, and the mask moved
+/// by 3 px changes the picture.
+#[test]
+fn gpu_matches_the_cpu_pipeline_behind_an_image_circle_mask() {
+    let masked = |cx: f64| {
+        let mut c = small_sensor().config.clone();
+        c.image.circle = Some([cx, 62.0, 50.0]);
+        c.light.vignetting = [-0.35, 0.2];
+        Sensor::from_config("small-masked", c).unwrap()
+    };
+    let sensor = masked(72.0);
+    gpu_matches_cpu(&sensor);
+    let picture = Renderer::new(&sensor).unwrap().reference().to_rgb();
+    let (mut outside, mut lit) = (0, 0);
+    for (x, y, p) in picture.enumerate_pixels() {
+        let d = (x as f64 - 72.0).hypot(y as f64 - 62.0);
+        if d > 50.5 {
+            assert_eq!(p.0, [0, 0, 0], "({x}, {y}) outside the mask is lit");
+            outside += 1;
+        } else if d < 49.5 && p.0 != [0, 0, 0] {
+            lit += 1;
+        }
+    }
+    assert!(outside > 5000 && lit > 7000, "{outside} black, {lit} lit");
+    let moved = Renderer::new(&masked(75.0)).unwrap().reference().to_rgb();
+    assert!(!close_enough(&diff(picture.as_raw(), moved.as_raw(), 3)));
+}
+
 /// Light carried in the gel (gel LEDs, each with its own band, beside a point LED) and a
 /// camera with its own colour matrix and gamma: the shaders' gel_light and encode_gamma
 /// against the CPU mirror, on the reference and four contacts (whose flanks the relief

@@ -511,6 +511,7 @@ fn uniform_structs_equal_the_shaders() {
         member!(S, gel_leds),
         member!(S, camera_response),
         member!(S, pad),
+        member!(S, image_circle),
         member!(S, blend_weights),
     ];
     let frame = vec![

@@ -18,7 +18,8 @@ use std::path::PathBuf;
 /// directory for sensor.toml, report.json and the pictures (None: no file is kept).
 /// `leds`, `samples`, `starts`: None for the command's defaults. `fit`: what is fitted, as
 /// `--fit` ("lens,light,imprint" by default; add "camera" for the colour matrix and gamma,
-/// "geometry" for the finger's length);
+/// "geometry" for the finger's length, "principal" and "focal" for the lens's principal point
+/// and focal length fitted to the light where the circle is a mask);
 /// `led_kind`: "point" or "gel" (default: the start sensor's). Returns the calibrated
 /// `Sensor`, whose `calibration` is the report.
 #[pyfunction]

@@ -66,6 +66,8 @@ struct Sensor {
     gel_leds: u32,
     camera_response: u32,
     pad: vec2<u32>,
+    // The image circle as a mask: centre (xy), radius squared (z), 1 when there is one (w).
+    image_circle: vec4<f32>,
     // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
     blend_weights: array<vec4<f32>, 65>,
 }
@@ -312,8 +314,12 @@ fn lens_unproject(rho: f32) -> f32 {
 }
 
 // Unit direction of the lens ray through pixel `px` (integer coordinates at pixel centres);
-// w = 0 when the pixel lies beyond the lens's field of view.
+// w = 0 when the pixel lies beyond the lens's field of view or outside the image circle.
 fn pixel_ray(px: vec2<f32>) -> vec4<f32> {
+    let cut = px - sensor.image_circle.xy;
+    if sensor.image_circle.w != 0.0 && dot(cut, cut) > sensor.image_circle.z {
+        return vec4<f32>(0.0);
+    }
     let offset = px - sensor.principal;
     let rho = length(offset);
     let theta = lens_unproject(rho);

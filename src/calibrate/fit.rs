@@ -104,7 +104,16 @@ pub fn fit_empty(
         .find(|m| m.leds == best.leds)
         .expect("the start's model")
         .clone();
-    let fit = levenberg_marquardt(&best.params, &model.bounds(), polish_iterations, |q| {
+    // A lens freed from the start's light wanders to explain the light's errors (a
+    // costlier end, by the robust cost and by PSNR): the light is polished with the lens
+    // held first, then everything together.
+    let lens = lens_slots(&model);
+    let from = if lens.is_empty() {
+        best.params.clone()
+    } else {
+        polish_free(&model, fine, &best.params, &lens, polish_iterations)
+    };
+    let fit = levenberg_marquardt(&from, &model.bounds(), polish_iterations, |q| {
         residuals(&model, fine, q)
     });
     EmptyFit {
@@ -116,16 +125,19 @@ pub fn fit_empty(
 }
 
 /// A coarse fit from the LEDs rotated by `rotation`: their places, spreads and fall-offs,
-/// the shine, vignetting and finger length searched; the colours and the ambient light
+/// the shine, vignetting and finger length searched (the camera and the principal point
+/// held); the colours and the ambient light
 /// following them by linear least squares (variable projection), which keeps a start out
 /// of the valleys where an LED's brightness and its distance trade off.
 fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
     let bounds = model.bounds();
     let mut held = colour_slots(model);
-    // The camera stays at the start's until the polish: the linear colours assume it.
+    // The camera stays at the start's until the polish: the linear colours assume it. So
+    // does the lens, a small correction the starts need not search.
     if let Some(i) = model.layout().camera {
         held.extend(i..i + 9);
     }
+    held.extend(lens_slots(model));
     let free: Vec<usize> = (0..model.len()).filter(|i| !held.contains(i)).collect();
     let reduced_bounds: Vec<_> = free.iter().map(|&i| bounds[i]).collect();
     let full = model.initial(rotation);
@@ -147,6 +159,39 @@ fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
         cost: fit.cost,
         params: expand(&fit.params),
     }
+}
+
+/// Where the lens's values (principal point, focal length) sit in a parameter vector.
+fn lens_slots(model: &Model) -> Vec<usize> {
+    let l = model.layout();
+    let mut slots: Vec<usize> = l.principal.map(|i| vec![i, i + 1]).unwrap_or_default();
+    slots.extend(l.focal);
+    slots
+}
+
+/// `p` polished on `samples` with the values at `held` kept as they are.
+fn polish_free(
+    model: &Model,
+    samples: &Samples,
+    p: &[f64],
+    held: &[usize],
+    iterations: usize,
+) -> Vec<f64> {
+    let free: Vec<usize> = (0..p.len()).filter(|i| !held.contains(i)).collect();
+    let bounds = model.bounds();
+    let reduced_bounds: Vec<_> = free.iter().map(|&i| bounds[i]).collect();
+    let expand = |q: &[f64]| {
+        let mut full = p.to_vec();
+        for (&i, &v) in free.iter().zip(q) {
+            full[i] = v;
+        }
+        full
+    };
+    let reduced: Vec<f64> = free.iter().map(|&i| p[i]).collect();
+    let fit = levenberg_marquardt(&reduced, &reduced_bounds, iterations, |q| {
+        residuals(model, samples, &expand(q))
+    });
+    expand(&fit.params)
 }
 
 /// Where the LED colours and the ambient light sit in a parameter vector.
@@ -186,14 +231,11 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
         })
         .collect();
     // Each LED's light alone and the ambient's, at every sample.
-    let basis: Vec<Vec<f64>> = samples
-        .rays
-        .iter()
-        .zip(&samples.radial)
-        .zip(&samples.hits)
-        .map(|((&ray, &x), cached)| {
+    let basis: Vec<Vec<f64>> = (0..samples.len())
+        .map(|i| {
+            let (hit, x) = model.hit(&d, samples, i);
             let gain = d.lighting.vignette(x);
-            let Some((hit, place)) = model.hit(&d, ray, cached) else {
+            let Some((hit, place)) = hit else {
                 return vec![0.0; n];
             };
             let mut row: Vec<f64> = alone

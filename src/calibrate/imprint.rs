@@ -138,7 +138,8 @@ pub fn locate(
 ) -> Result<(Vec<Located>, Vec<Skipped>)> {
     let localiser = Localiser::new(sensor);
     let (w, h) = (sensor.width, sensor.height);
-    let rim = sensor.lens.max_rho() - 2.0;
+    let (circle_centre, circle_radius) = sensor.image_circle();
+    let rim = circle_radius - 2.0;
     let found: Vec<Result<std::result::Result<Located, Skipped>>> = set
         .frames
         .par_iter()
@@ -169,7 +170,7 @@ pub fn locate(
             let window = (0..(w * h) as usize)
                 .filter(|&i| {
                     let p = DVec2::new((i as u32 % w) as f64, (i as u32 / w) as f64);
-                    (p - pixel).length_squared() <= r2 && (p - sensor.principal).length() <= rim
+                    (p - pixel).length_squared() <= r2 && (p - circle_centre).length() <= rim
                 })
                 .collect();
             Ok(Ok(Located {

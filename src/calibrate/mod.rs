@@ -53,8 +53,14 @@ pub struct Options {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FitSet {
     /// The lens from the image circle (its centre and the focal length that puts the field
-    /// of view on its edge).
+    /// of view on its edge), the circle held as the image's mask.
     pub lens: bool,
+    /// The lens's principal point fitted to the light: where the circle is a mask, its
+    /// centre need not be the lens's.
+    pub principal: bool,
+    /// The focal length fitted to the light: where the circle is a mask, the field of view
+    /// it implies is a guess (contact frames pin the lens better where there are some).
+    pub focal: bool,
     /// LEDs, ambient light, paint shine, vignetting.
     pub light: bool,
     /// The camera's colour matrix and gamma (held by default).
@@ -71,6 +77,8 @@ impl Default for FitSet {
     fn default() -> Self {
         FitSet {
             lens: true,
+            principal: false,
+            focal: false,
             light: true,
             camera: false,
             geometry: false,
@@ -80,11 +88,21 @@ impl Default for FitSet {
 }
 
 impl FitSet {
-    pub const PARTS: [&'static str; 5] = ["lens", "light", "camera", "geometry", "imprint"];
+    pub const PARTS: [&'static str; 7] = [
+        "lens",
+        "principal",
+        "focal",
+        "light",
+        "camera",
+        "geometry",
+        "imprint",
+    ];
 
     /// Nothing fitted.
     pub const NONE: FitSet = FitSet {
         lens: false,
+        principal: false,
+        focal: false,
         light: false,
         camera: false,
         geometry: false,
@@ -97,6 +115,8 @@ impl FitSet {
         for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             match part {
                 "lens" => set.lens = true,
+                "principal" => set.principal = true,
+                "focal" => set.focal = true,
                 "light" => set.light = true,
                 "camera" => set.camera = true,
                 "geometry" => set.geometry = true,
@@ -127,10 +147,16 @@ impl FitSet {
                 ),
             ));
         }
-        if (self.camera || self.geometry) && !self.light {
+        if (self.camera || self.geometry || self.principal || self.focal) && !self.light {
             return Err(GeltipError::option(
                 "fit",
-                "the camera and the geometry are fitted with the light; add light",
+                "the camera, the geometry, the principal point and the focal length are fitted with the light; add light",
+            ));
+        }
+        if (self.principal || self.focal) && !self.lens {
+            return Err(GeltipError::option(
+                "fit",
+                "the principal point and the focal length are fitted with the lens; add lens",
             ));
         }
         Ok(())
@@ -140,6 +166,8 @@ impl FitSet {
     pub fn names(&self) -> String {
         let on = [
             self.lens,
+            self.principal,
+            self.focal,
             self.light,
             self.camera,
             self.geometry,
@@ -239,19 +267,19 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
     let frames = EmptyFrames::load(&options.empty)?;
     progress("finding the image circle");
     let circle = circle::find(&frames.mean)?;
-    let lensed = if options.fit.lens {
-        with_lens(&options.start, &frames, &circle)?
+    let (lensed, reach) = if options.fit.lens {
+        with_lens(&options.start, &frames, &circle, &options.fit)?
     } else {
-        held_lens(&options.start, &frames)?
+        (held_lens(&options.start, &frames)?, LensReach::default())
     };
     let mut values = if options.fit.lens {
-        lens_values(&lensed, &circle)
+        lens_values(&lensed, &circle, &reach)
     } else {
         Vec::new()
     };
     let (mut config, leds, fit_cost, fit_iterations, starts, at_bounds) = if options.fit.light {
         progress("fitting the light");
-        let fitted = fit_light(options, &lensed, &frames, &circle)?;
+        let fitted = fit_light(options, &lensed, &frames, &circle, reach)?;
         let model = &fitted.model;
         values.extend(light_values(&fitted));
         (
@@ -333,6 +361,7 @@ fn fit_light(
     lensed: &Sensor,
     frames: &EmptyFrames,
     circle: &ImageCircle,
+    reach: LensReach,
 ) -> Result<fit::EmptyFit> {
     let listed = listed_leds(lensed);
     let kind = options
@@ -353,6 +382,8 @@ fn fit_light(
             kind,
             camera: options.fit.camera,
             geometry: options.fit.geometry,
+            principal: reach.principal_px,
+            focal: reach.focal_low,
         })
         .collect();
     let fine = sample(lensed, frames, circle, options.samples);
@@ -463,25 +494,112 @@ fn noise_values(frames: &EmptyFrames, circle: &ImageCircle) -> Option<([f64; 3],
     Some((noise, values))
 }
 
-/// The start sensor with the frame's size and the lens the circle implies: the principal
-/// point at its centre, the focal length that puts the edge of the field of view on it.
-pub fn with_lens(start: &Sensor, frames: &EmptyFrames, circle: &ImageCircle) -> Result<Sensor> {
+/// How far from the image circle's centre the principal point may be fitted, as a fraction
+/// of the circle's radius.
+pub const PRINCIPAL_REACH: f64 = 0.1;
+
+/// How far calibration may move the lens from where the image circle put it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LensReach {
+    /// The principal point, px each way (`None`: held).
+    pub principal_px: Option<f64>,
+    /// The focal length's least fraction of the start's (`None`: held).
+    pub focal_low: Option<f64>,
+}
+
+/// The start sensor with the frame's size and the lens the circle implies, the circle held
+/// as the image's mask (`image.circle`). A start sensor without a mask takes the circle for
+/// the lens's edge: the principal point at its centre, the focal length that puts the edge
+/// of the field of view on it. One with a mask keeps its lens and its principal point's
+/// offset from the mask's centre. Where `fit` frees the principal point or the focal length,
+/// the field of view is widened so the lens covers the circle wherever they may go; how far
+/// that is comes back.
+pub fn with_lens(
+    start: &Sensor,
+    frames: &EmptyFrames,
+    circle: &ImageCircle,
+    fit: &FitSet,
+) -> Result<(Sensor, LensReach)> {
     let mut c = start.config.clone();
     c.image.width = frames.mean.width;
     c.image.height = frames.mean.height;
-    c.lens.cx = circle.centre.x;
-    c.lens.cy = circle.centre.y;
-    // rho(theta_max) scales with the focal length for every model.
-    let unit = start.lens.max_rho() / start.lens.focal_px;
-    c.lens.focal_px = circle.radius / unit;
-    Sensor::from_config(start.name.clone(), c).map_err(|e| GeltipError::InvalidImage {
-        path: frames.mean.path.clone(),
-        reason: format!("the image circle gives a lens the sensor cannot have: {e}"),
-    })
+    let offset = match start.config.image.circle {
+        Some([mx, my, _]) => DVec2::new(c.lens.cx - mx, c.lens.cy - my),
+        None => {
+            // rho(theta_max) scales with the focal length for every model.
+            let unit = start.lens.max_rho() / start.lens.focal_px;
+            c.lens.focal_px = circle.radius / unit;
+            DVec2::ZERO
+        }
+    };
+    c.lens.cx = circle.centre.x + offset.x;
+    c.lens.cy = circle.centre.y + offset.y;
+    c.image.circle = Some([circle.centre.x, circle.centre.y, circle.radius]);
+    let mut reach = LensReach::default();
+    if fit.principal || fit.focal {
+        let mut room = if fit.principal {
+            PRINCIPAL_REACH * circle.radius
+        } else {
+            0.0
+        };
+        let shortest = if fit.focal {
+            1.0 - model::FOCAL_REACH
+        } else {
+            1.0
+        };
+        let need = circle.radius + room + offset.length();
+        // rho scales with the focal length for every model: a field of view that covers
+        // the circle at the shortest focal length covers it at every longer one.
+        if let Some(rho) = widen_fov(&mut c, need / shortest) {
+            if fit.focal {
+                reach.focal_low = Some((need / rho).max(shortest).min(1.0));
+            } else {
+                room = room.min(rho - circle.radius - offset.length());
+            }
+            if fit.principal && room >= 0.5 {
+                reach.principal_px = Some(room);
+            }
+        }
+    }
+    let sensor =
+        Sensor::from_config(start.name.clone(), c).map_err(|e| GeltipError::InvalidImage {
+            path: frames.mean.path.clone(),
+            reason: format!("the image circle gives a lens the sensor cannot have: {e}"),
+        })?;
+    Ok((sensor, reach))
 }
 
-/// The circle's values and the lens they set, each with the circle fit's uncertainty.
-fn lens_values(sensor: &Sensor, circle: &ImageCircle) -> Vec<Value> {
+/// Widens the lens's field of view (1 degree at a time) until it reaches `rho` px from the
+/// principal point, as far as the lens model allows; the image radius it reaches, `None`
+/// when no wider field of view is valid.
+fn widen_fov(c: &mut SensorConfig, rho: f64) -> Option<f64> {
+    let limit = if c.lens.model == crate::LensModel::Pinhole {
+        179.0
+    } else {
+        359.0
+    };
+    let mut best = None;
+    let mut fov = c.lens.fov_deg;
+    while fov <= limit {
+        let mut trial = c.clone();
+        trial.lens.fov_deg = fov;
+        if let Ok(sensor) = Sensor::from_config("", trial) {
+            let reached = sensor.lens.max_rho();
+            best = Some((fov, reached));
+            if reached >= rho {
+                break;
+            }
+        }
+        fov = (fov.floor() + 1.0).min(limit + 1.0);
+    }
+    let (fov, reached) = best?;
+    c.lens.fov_deg = fov;
+    Some(reached)
+}
+
+/// The circle's values and the lens they set, each with the circle fit's uncertainty (the
+/// lens's values the light fit does not fit).
+fn lens_values(sensor: &Sensor, circle: &ImageCircle, reach: &LensReach) -> Vec<Value> {
     // A circle fitted to n points with rms scatter s: centre and radius to about s/sqrt(n/2).
     let e = circle.rms_px.max(0.29) / (circle.points as f64 / 2.0).sqrt();
     let unit = sensor.lens.max_rho() / sensor.lens.focal_px;
@@ -490,14 +608,19 @@ fn lens_values(sensor: &Sensor, circle: &ImageCircle) -> Vec<Value> {
         value,
         std_error,
     };
-    vec![
+    let mut out = vec![
         v("image_circle.cx", circle.centre.x, e),
         v("image_circle.cy", circle.centre.y, e),
         v("image_circle.radius", circle.radius, e),
-        v("lens.cx", sensor.config.lens.cx, e),
-        v("lens.cy", sensor.config.lens.cy, e),
-        v("lens.focal_px", sensor.config.lens.focal_px, e / unit),
-    ]
+    ];
+    if reach.principal_px.is_none() {
+        out.push(v("lens.cx", sensor.config.lens.cx, e));
+        out.push(v("lens.cy", sensor.config.lens.cy, e));
+    }
+    if reach.focal_low.is_none() {
+        out.push(v("lens.focal_px", sensor.config.lens.focal_px, e / unit));
+    }
+    out
 }
 
 /// The fitted values the frames leave loose: an infinite error, or one larger than the

@@ -7,6 +7,7 @@
 //! pixels, so the fitted values mean in `sensor.toml` what they meant while fitting.
 
 use crate::finger::Finger;
+use crate::lens::Lens;
 use crate::render::camera::SkinHit;
 use crate::render::leds::{self, GelPlace};
 use crate::sensor::{
@@ -42,6 +43,10 @@ pub struct Layout {
     pub camera: Option<usize>,
     /// The cylinder's length (mm).
     pub length: Option<usize>,
+    /// The lens's principal point (px), when the image circle is a mask apart from it.
+    pub principal: Option<usize>,
+    /// The lens's focal length (px).
+    pub focal: Option<usize>,
     pub len: usize,
 }
 
@@ -70,13 +75,13 @@ impl Samples {
             radial: Vec::new(),
             hits: Vec::new(),
         };
-        let max_rho = sensor.lens.max_rho();
+        let radius = sensor.image_circle().1;
         for &(p, obs) in pixels {
             if let Some(ray) = sensor.ray_direction(p) {
                 out.pixels.push(p);
                 out.rays.push(ray);
                 out.observed.push(obs);
-                out.radial.push((p - sensor.principal).length() / max_rho);
+                out.radial.push((p - sensor.principal).length() / radius);
                 out.hits.push(hit_on(&sensor.finger, ray));
             }
         }
@@ -103,7 +108,16 @@ pub struct Model {
     pub camera: bool,
     /// Fit the finger's length (else the start's is held).
     pub geometry: bool,
+    /// Fit the lens's principal point within this many px of the start's (else held): where
+    /// the image circle is a mask, its centre need not be the lens's.
+    pub principal: Option<f64>,
+    /// Fit the focal length from this fraction of the start's up to 1 + [`FOCAL_REACH`] of
+    /// it (else held).
+    pub focal: Option<f64>,
 }
+
+/// How far the focal length may be fitted from the start's, as a fraction of it.
+pub const FOCAL_REACH: f64 = 0.3;
 
 /// The values of `params` as the renderer's light, paint and finger.
 pub struct Decoded {
@@ -111,6 +125,8 @@ pub struct Decoded {
     pub specular: f64,
     pub shininess: f64,
     pub finger: Finger,
+    pub principal: DVec2,
+    pub lens: Lens,
 }
 
 impl Model {
@@ -123,6 +139,8 @@ impl Model {
             kind: LedKindName::Point,
             camera: false,
             geometry: false,
+            principal: None,
+            focal: None,
         }
     }
 
@@ -143,6 +161,8 @@ impl Model {
         let band = (self.kind == LedKindName::Gel).then(|| take(3));
         let camera = self.camera.then(|| take(9));
         let length = self.geometry.then(|| take(1));
+        let principal = self.principal.map(|_| take(2));
+        let focal = self.focal.map(|_| take(1));
         Layout {
             per_led,
             colour,
@@ -152,6 +172,8 @@ impl Model {
             band,
             camera,
             length,
+            principal,
+            focal,
             len: at,
         }
     }
@@ -216,6 +238,12 @@ impl Model {
         if l.length.is_some() {
             out.push("finger.cylinder_length_mm".to_string());
         }
+        if l.principal.is_some() {
+            out.extend(["lens.cx", "lens.cy"].map(String::from));
+        }
+        if l.focal.is_some() {
+            out.push("lens.focal_px".to_string());
+        }
         out
     }
 
@@ -279,6 +307,17 @@ impl Model {
         }
         if l.length.is_some() {
             out.push(b(f.radius, f.radius * 8.0, 1e-4));
+        }
+        if let Some(reach) = self.principal {
+            let c = self.start.principal;
+            out.extend([
+                b(c.x - reach, c.x + reach, 1e-3),
+                b(c.y - reach, c.y + reach, 1e-3),
+            ]);
+        }
+        if let Some(low) = self.focal {
+            let f = self.start.lens.focal_px;
+            out.push(b(f * low, f * (1.0 + FOCAL_REACH), 1e-4 * f));
         }
         out
     }
@@ -358,6 +397,12 @@ impl Model {
         if l.length.is_some() {
             p.push(s.finger.cylinder_length);
         }
+        if l.principal.is_some() {
+            p.extend([s.principal.x, s.principal.y]);
+        }
+        if l.focal.is_some() {
+            p.push(s.lens.focal_px);
+        }
         p
     }
 
@@ -435,6 +480,13 @@ impl Model {
             specular,
             shininess,
             finger,
+            principal: l
+                .principal
+                .map_or(self.start.principal, |i| DVec2::new(p[i], p[i + 1])),
+            lens: Lens {
+                focal_px: l.focal.map_or(self.start.lens.focal_px, |i| p[i]),
+                ..self.start.lens
+            },
         }
     }
 
@@ -456,18 +508,24 @@ impl Model {
             ))
     }
 
-    /// Where `ray` meets the finger the values `d` describe: the sample's `cached` hit on the
-    /// start sensor's finger while the finger is held.
+    /// Where sample `i`'s ray meets the finger the values `d` describe, and its vignetting
+    /// x: the sample's cached hit and x on the start sensor while the finger and the
+    /// lens are held.
     pub fn hit(
         &self,
         d: &Decoded,
-        ray: DVec3,
-        cached: &Option<(SkinHit, GelPlace)>,
-    ) -> Option<(SkinHit, GelPlace)> {
-        if self.geometry {
-            hit_on(&d.finger, ray)
+        samples: &Samples,
+        i: usize,
+    ) -> (Option<(SkinHit, GelPlace)>, f64) {
+        if d.principal != self.start.principal || d.lens != self.start.lens {
+            let offset = samples.pixels[i] - d.principal;
+            let x = offset.length() / self.start.image_circle().1;
+            let hit = d.lens.ray(offset).and_then(|ray| hit_on(&d.finger, ray));
+            (hit, x)
+        } else if self.geometry {
+            (hit_on(&d.finger, samples.rays[i]), samples.radial[i])
         } else {
-            *cached
+            (samples.hits[i], samples.radial[i])
         }
     }
 
@@ -479,19 +537,15 @@ impl Model {
         paint.specular = d.specular;
         paint.shininess = d.shininess;
         let camera = d.lighting.camera;
-        samples
-            .rays
-            .iter()
-            .zip(&samples.radial)
-            .zip(&samples.hits)
-            .map(|((&ray, &x), cached)| match self.hit(&d, ray, cached) {
-                Some((hit, place)) => {
+        (0..samples.len())
+            .map(|i| match self.hit(&d, samples, i) {
+                (Some((hit, place)), x) => {
                     let gain = d.lighting.vignette(x);
                     let light = leds::shade_at(&d.lighting, &paint, &hit, Some(&place));
                     let c = camera.mix(light * gain);
                     std::array::from_fn(|k| unclipped_level(c[k], camera.gamma[k]))
                 }
-                None => [0.0; 3],
+                (None, _) => [0.0; 3],
             })
             .collect()
     }
@@ -503,6 +557,9 @@ impl Model {
         let d = self.decode(p);
         let mut c = self.start.config.clone();
         c.finger.cylinder_length_mm = d.finger.cylinder_length;
+        c.lens.cx = d.principal.x;
+        c.lens.cy = d.principal.y;
+        c.lens.focal_px = d.lens.focal_px;
         c.paint.specular = d.specular;
         c.paint.shininess = d.shininess;
         c.paint.colour = [1.0; 3];

@@ -34,9 +34,11 @@ pub struct CalibrateArgs {
     /// base); by default the start sensor's listed LEDs' kind, point for a ring.
     #[arg(long = "led-kind", value_parser = ["point", "gel"])]
     led_kind: Option<String>,
-    /// What to fit, comma-separated, of lens (from the image circle), light, camera (colour
-    /// matrix and gamma), geometry (the finger's length) and imprint (from --contacts); the
-    /// rest is held at the start sensor's values.
+    /// What to fit, comma-separated, of lens (from the image circle, kept as the mask),
+    /// principal and focal (the lens's principal point and focal length fitted to the light,
+    /// where the circle is a mask), light, camera (colour matrix and gamma), geometry (the
+    /// finger's length) and imprint (from --contacts); the rest is held at the start
+    /// sensor's values.
     #[arg(long, default_value = "lens,light,imprint")]
     fit: String,
     /// Starting rotations of the LEDs tried (more find a better fit more often, and take

@@ -314,7 +314,8 @@ impl Localiser {
     ) -> Result<Detection> {
         check_sizes(reference, frame, Some(&self.sensor))?;
         let s = &self.sensor;
-        let found = change::detect(reference, frame, s.principal, s.lens.max_rho(), config);
+        let (centre, radius) = s.image_circle();
+        let found = change::detect(reference, frame, centre, radius, config);
         // Placed on the surface as the surface method places its own contacts (a weighted
         // centroid in the image is pulled by shading and the lens's compression), or where
         // the surface method itself puts it when the two agree.

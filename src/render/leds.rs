@@ -120,9 +120,9 @@ pub fn gel_light(
 }
 
 /// The vignetting gain at `pixel`: [`Lighting::vignette`] at its distance from the principal
-/// point over the lens's image-circle radius.
+/// point over the image circle's radius.
 pub fn vignette(sensor: &Sensor, light: &Lighting, pixel: DVec2) -> f64 {
-    light.vignette((pixel - sensor.principal).length() / sensor.lens.max_rho())
+    light.vignette((pixel - sensor.principal).length() / sensor.image_circle().1)
 }
 
 /// The 8-bit colour of `pixel` whose ray meets `hit`: shaded, vignetted, recorded by the

@@ -66,6 +66,9 @@ pub struct SensorUniform {
     pub gel_leds: u32,
     pub camera_response: u32,
     pub pad: [u32; 2],
+    /// The image circle when the sensor file gives one as a mask: centre (xy), radius
+    /// squared (z), 1 when there is one (w).
+    pub image_circle: [f32; 4],
     /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
     /// [`super::elastomer::blend_weights`].
     pub blend_weights: [[f32; 4]; BLEND_WEIGHTS],
@@ -75,7 +78,7 @@ pub struct SensorUniform {
 pub const BLEND_WEIGHTS: usize = super::elastomer::MAX_BLEND_TAPS as usize + 1;
 
 const _: () =
-    assert!(std::mem::size_of::<SensorUniform>() == 272 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
+    assert!(std::mem::size_of::<SensorUniform>() == 288 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -210,7 +213,7 @@ impl SensorUniform {
             vignetting: [
                 light.vignetting[0] as f32,
                 light.vignetting[1] as f32,
-                (1.0 / sensor.lens.max_rho()) as f32,
+                (1.0 / sensor.image_circle().1) as f32,
                 0.0,
             ],
             led_position: leds[0],
@@ -222,6 +225,9 @@ impl SensorUniform {
             gel_leds: light.has_gel_leds() as u32,
             camera_response: !camera.is_default() as u32,
             pad: [0; 2],
+            image_circle: c.image.circle.map_or([0.0; 4], |[cx, cy, r]| {
+                [cx as f32, cy as f32, (r as f32) * (r as f32), 1.0]
+            }),
             blend_weights,
         }
     }

@@ -37,12 +37,19 @@ pub struct LensConfig {
     pub k: [f64; 4],
 }
 
-/// `[image]`: the picture's size in pixels.
+/// `[image]`: the picture's size in pixels, and where a camera's software cuts it to a
+/// circle of its own.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImageConfig {
     pub width: u32,
     pub height: u32,
+    /// The image circle `[cx, cy, radius]` (px) when it is a mask of its own: pixels
+    /// outside it are black whatever the lens sees. Absent, the lens's field of view about
+    /// the principal point is the circle. A real sensor's mask need not be centred on the
+    /// lens's principal point, so the two are held apart.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub circle: Option<[f64; 3]>,
 }
 
 /// `[elastomer]`: how the gel turns the object's penetration into a deformation.
@@ -265,6 +272,19 @@ impl SensorConfig {
                 return Err(GeltipError::config(
                     field,
                     format!("must be between 1 and {MAX_IMAGE_SIDE} pixels, got {v}"),
+                ));
+            }
+        }
+        if let Some([cx, cy, r]) = img.circle {
+            for (i, v) in [cx, cy].into_iter().enumerate() {
+                finite(&format!("image.circle[{i}]"), v)?;
+            }
+            finite_positive("image.circle[2]", r)?;
+            let (w, h) = (img.width as f64, img.height as f64);
+            if cx < 0.0 || cx > w || cy < 0.0 || cy > h {
+                return Err(GeltipError::config(
+                    "image.circle",
+                    format!("centre ({cx}, {cy}) is outside the image ({w} x {h})"),
                 ));
             }
         }

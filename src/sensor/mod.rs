@@ -50,6 +50,8 @@ pub enum NotVisible {
     OutsideFov { theta_deg: f64, half_fov_deg: f64 },
     /// The lens sees it but the image sensor does not cover that pixel.
     OutsideImage { u: f64, v: f64 },
+    /// It lands on the image outside the image circle the camera cuts it to.
+    OutsideCircle { u: f64, v: f64 },
     /// A coordinate is NaN or infinite.
     NotFinite,
 }
@@ -67,6 +69,9 @@ impl std::fmt::Display for NotVisible {
             ),
             NotVisible::OutsideImage { u, v } => {
                 write!(f, "lands at pixel ({u:.3}, {v:.3}), outside the image")
+            }
+            NotVisible::OutsideCircle { u, v } => {
+                write!(f, "lands at pixel ({u:.3}, {v:.3}), outside the image circle")
             }
             NotVisible::NotFinite => write!(f, "a coordinate is not a finite number"),
         }
@@ -170,24 +175,35 @@ impl Sensor {
             && pixel.y <= self.height as f64 - 0.5
     }
 
+    /// The image circle's centre and radius (px): the mask's where the sensor file gives one
+    /// (`image.circle`), else the principal point and the edge of the lens's field of view.
+    pub fn image_circle(&self) -> (DVec2, f64) {
+        match self.config.image.circle {
+            Some([cx, cy, r]) => (DVec2::new(cx, cy), r),
+            None => (self.principal, self.lens.max_rho()),
+        }
+    }
+
+    /// Whether the pixel lies inside the image circle, where the sensor file gives one as a
+    /// mask (`image.circle`); always true without one. Compared in f32 as the shaders do,
+    /// so the CPU and the GPU cut the same pixels.
+    pub fn in_circle(&self, pixel: DVec2) -> bool {
+        match self.config.image.circle {
+            None => true,
+            Some([cx, cy, r]) => {
+                let d = pixel.as_vec2() - glam::Vec2::new(cx as f32, cy as f32);
+                d.length_squared() <= (r as f32) * (r as f32)
+            }
+        }
+    }
+
     /// Unit direction of the lens ray through `pixel`, or `None` outside the image or the
     /// lens's field of view.
     pub fn ray_direction(&self, pixel: DVec2) -> Option<DVec3> {
-        if !pixel.is_finite() || !self.in_image(pixel) {
+        if !pixel.is_finite() || !self.in_image(pixel) || !self.in_circle(pixel) {
             return None;
         }
-        let offset = pixel - self.principal;
-        let rho = offset.length();
-        let theta = self.lens.unproject(rho)?;
-        if rho == 0.0 {
-            return Some(DVec3::Z);
-        }
-        let (sin_t, cos_t) = theta.sin_cos();
-        Some(DVec3::new(
-            sin_t * offset.x / rho,
-            sin_t * offset.y / rho,
-            cos_t,
-        ))
+        self.lens.ray(pixel - self.principal)
     }
 
     /// The map m: the surface point a pixel sees, or `None` when it sees no part of the
@@ -228,6 +244,12 @@ impl Sensor {
         };
         if !self.in_image(pixel) {
             return Err(NotVisible::OutsideImage {
+                u: pixel.x,
+                v: pixel.y,
+            });
+        }
+        if !self.in_circle(pixel) {
+            return Err(NotVisible::OutsideCircle {
                 u: pixel.x,
                 v: pixel.y,
             });
