@@ -246,6 +246,7 @@ def calibrate(
     (starting rotations of the LEDs): None for the command's defaults; fewer samples and
     starts are faster and rougher. `fit`: what is fitted, as `--fit` (default
     "lens,light,imprint"; add "camera" for the colour matrix and gamma, "geometry" for the
-    finger's length); `led_kind`:
+    finger's length, "principal" and "focal" for the lens's principal point and focal length
+    fitted to the light where the image circle is a mask); `led_kind`:
     "point" or "gel" (default: the start sensor's). Returns the calibrated Sensor, named "calibrated", whose
     `calibration` is the report. Runs with the GIL released."""
