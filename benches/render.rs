@@ -3,7 +3,8 @@
 //! <preset|file.toml>` for another sensor, `-- --batch 8,64,256` for the batch rows' frames
 //! per submission (default 8 and the device's default), `-- --lanes 16,64` for the frames
 //! of a submission recorded side by side in them (default the device's); `-- --host-phases N` prints only one contact per
-//! submit over N passes, by the host's speed before each).
+//! submit over N passes, by the host's speed before each; `-- --same N` takes each contact N
+//! times in a row, so that the frames a wave of lanes renders together are equal).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
@@ -35,10 +36,13 @@ use geltip::sensor::Sensor;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// `n` contacts: the paper's 56 taps (seven solids at its eight positions), over and over.
-fn contacts(n: usize) -> Vec<Press> {
+/// `n` contacts: the paper's 56 taps (seven solids at its eight positions), over and over,
+/// each `same` times in a row (`--same`: a wave of lanes then holds equal frames).
+fn contacts(n: usize, same: usize) -> Vec<Press> {
     let all = experiment::all_taps(&Protocol::default());
-    all.iter().cycle().take(n).cloned().collect()
+    (0..n)
+        .map(|i| all[(i / same.max(1)) % all.len()].clone())
+        .collect()
 }
 
 /// One measured pass: frames, wall time and the renderer's split, and the host's speed just
@@ -226,6 +230,7 @@ fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let frames: usize = arg(&args, "--frames")?.unwrap_or(64).max(1);
     let repeat: usize = arg(&args, "--repeat")?.unwrap_or(5).max(1);
+    let same: usize = arg(&args, "--same")?.unwrap_or(1).max(1);
     let sensor_arg: String = arg(&args, "--sensor")?.unwrap_or_else(|| "paper".to_string());
     let sensor = Sensor::load(&sensor_arg)?;
     // Before anything else runs: the host's speed now (and again at the end), so that rows
@@ -263,7 +268,7 @@ fn main() -> anyhow::Result<()> {
     })?;
     row("no contact, full ray cast", &mut reference);
 
-    let list = contacts(frames);
+    let list = contacts(frames, same);
     if let Some(n) = arg::<usize>(&args, "--host-phases")? {
         return host_phases(&mut r, &list, n.max(1));
     }
@@ -282,7 +287,7 @@ fn main() -> anyhow::Result<()> {
         64.0 * per_frame(|t| t.listed_tiles),
         per_frame(|t| t.touched_pixels)
     );
-    texel_rects(&sensor, r.grid(), &contacts(56))?;
+    texel_rects(&sensor, r.grid(), &contacts(56, 1))?;
     device_overhead(geltip::gpu::GpuContext::shared()?)?;
     println!("{} (at the end)", HostSpeed::measure());
     Ok(())
