@@ -125,12 +125,11 @@ pub fn fit_empty(
 }
 
 /// A coarse fit from the LEDs rotated by `rotation`: their places, spreads and fall-offs,
-/// the shine, vignetting and finger length searched (the camera and the principal point
-/// held); the colours and the ambient light
-/// following them by linear least squares (variable projection), which keeps a start out
-/// of the valleys where an LED's brightness and its distance trade off.
+/// the shine, vignetting and finger length searched (the camera and the lens held); the
+/// colours and the ambient light following them by linear least squares (variable
+/// projection), which keeps a start out of the valleys where an LED's brightness and its
+/// distance trade off.
 fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
-    let bounds = model.bounds();
     let mut held = colour_slots(model);
     // The camera stays at the start's until the polish: the linear colours assume it. So
     // does the lens, a small correction the starts need not search.
@@ -138,26 +137,14 @@ fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
         held.extend(i..i + 9);
     }
     held.extend(lens_slots(model));
-    let free: Vec<usize> = (0..model.len()).filter(|i| !held.contains(i)).collect();
-    let reduced_bounds: Vec<_> = free.iter().map(|&i| bounds[i]).collect();
-    let full = model.initial(rotation);
-    let expand = |q: &[f64]| {
-        let mut p = full.clone();
-        for (&i, &v) in free.iter().zip(q) {
-            p[i] = v;
-        }
-        linear_colours(model, coarse, &mut p);
-        p
-    };
-    let reduced: Vec<f64> = free.iter().map(|&i| full[i]).collect();
-    let fit = levenberg_marquardt(&reduced, &reduced_bounds, 40, |q| {
-        residuals(model, coarse, &expand(q))
+    let (fit, params) = fit_held(model, coarse, &model.initial(rotation), &held, 40, |p| {
+        linear_colours(model, coarse, p)
     });
     Start {
         leds: model.leds,
         rotation_deg: rotation,
         cost: fit.cost,
-        params: expand(&fit.params),
+        params,
     }
 }
 
@@ -177,6 +164,20 @@ fn polish_free(
     held: &[usize],
     iterations: usize,
 ) -> Vec<f64> {
+    fit_held(model, samples, p, held, iterations, |_| {}).1
+}
+
+/// Levenberg-Marquardt on `samples` over the values of `p` not at `held` (those keep `p`'s),
+/// `fill` setting whatever follows from the free ones before each evaluation: the fit and
+/// the whole parameter vector it ends at.
+fn fit_held(
+    model: &Model,
+    samples: &Samples,
+    p: &[f64],
+    held: &[usize],
+    iterations: usize,
+    fill: impl Fn(&mut [f64]) + Sync,
+) -> (Fit, Vec<f64>) {
     let free: Vec<usize> = (0..p.len()).filter(|i| !held.contains(i)).collect();
     let bounds = model.bounds();
     let reduced_bounds: Vec<_> = free.iter().map(|&i| bounds[i]).collect();
@@ -185,13 +186,15 @@ fn polish_free(
         for (&i, &v) in free.iter().zip(q) {
             full[i] = v;
         }
+        fill(&mut full);
         full
     };
     let reduced: Vec<f64> = free.iter().map(|&i| p[i]).collect();
     let fit = levenberg_marquardt(&reduced, &reduced_bounds, iterations, |q| {
         residuals(model, samples, &expand(q))
     });
-    expand(&fit.params)
+    let params = expand(&fit.params);
+    (fit, params)
 }
 
 /// Where the LED colours and the ambient light sit in a parameter vector.

@@ -284,12 +284,9 @@ fn picture(sensor: &Sensor, tiles: &[Tile], window_px: f64) -> image::RgbImage {
     );
     let w = sensor.width as i64;
     let h = sensor.height as i64;
-    for (row, tile_of) in tiles.iter().enumerate() {
-        let (cx, cy) = (
-            tile_of.pixel.x.round() as i64,
-            tile_of.pixel.y.round() as i64,
-        );
-        for (col, img) in tile_of.images.iter().enumerate() {
+    for (row, group) in tiles.iter().enumerate() {
+        let (cx, cy) = (group.pixel.x.round() as i64, group.pixel.y.round() as i64);
+        for (col, img) in group.images.iter().enumerate() {
             for dy in -half..=half {
                 for dx in -half..=half {
                     let (x, y) = (cx + dx, cy + dy);
