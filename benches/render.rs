@@ -4,7 +4,9 @@
 //! per submission (default 8 and the device's default), `-- --lanes 16,64` for the frames
 //! of a submission recorded side by side in them (default the device's); `-- --host-phases N` prints only one contact per
 //! submit over N passes, by the host's speed before each; `-- --same N` takes each contact N
-//! times in a row, so that the frames a wave of lanes renders together are equal).
+//! times in a row, so that the frames a wave of lanes renders together are equal;
+//! `-- --wave-stages N` prints only each stage's time for N of the paper's taps alone, in
+//! one wave of N lanes, and in waves of N equal frames).
 //!
 //! Rows: the no-contact frame rendered from scratch (every pixel ray-cast, done once per
 //! sensor), one contact per submission, and batches of contacts per submission; each split
@@ -272,6 +274,9 @@ fn main() -> anyhow::Result<()> {
     if let Some(n) = arg::<usize>(&args, "--host-phases")? {
         return host_phases(&mut r, &list, n.max(1));
     }
+    if let Some(n) = arg::<usize>(&args, "--wave-stages")? {
+        return wave_stage_table(&mut r, &list, n.max(2), repeat);
+    }
     let mut batches = counts(&args, "--batch")?.unwrap_or(vec![8, r.batch_frames()]);
     batches.dedup();
     let lanes = counts(&args, "--lanes")?.unwrap_or(vec![r.lanes()]);
@@ -483,6 +488,80 @@ fn stage_table(r: &mut Renderer, list: &[Press]) -> anyhow::Result<()> {
         println!("| {name:<28} | {ms:>14.3} | {random_ms:>22.3} |");
     }
     println!();
+    Ok(())
+}
+
+/// What recording frames side by side in one wave does to each stage, from timestamps (ms
+/// for `n` frames, the median of `repeat` runs): `n` of the paper's taps each alone, the
+/// same `n` in one wave (`n` lanes), and each tap `n` times in a wave of its own, divided
+/// by `n` (a wave of equal frames).
+fn wave_stage_table(
+    r: &mut Renderer,
+    list: &[Press],
+    n: usize,
+    repeat: usize,
+) -> anyhow::Result<()> {
+    r.set_lanes(n)?;
+    let taps: Vec<Press> = list.iter().step_by(7).cycle().take(n).cloned().collect();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut table: Vec<(&str, [f64; 3])> = Vec::new();
+    let mut add = |column: usize, stages: Vec<(&'static str, f64)>| {
+        for (i, (name, ms)) in stages.into_iter().enumerate() {
+            if table.len() <= i {
+                table.push((name, [0.0; 3]));
+            }
+            table[i].1[column] += ms;
+        }
+    };
+    let timed = |r: &mut Renderer, presses: &[Press]| -> anyhow::Result<Vec<(&'static str, f64)>> {
+        let runs = (0..repeat)
+            .map(|_| r.profile_wave(presses))
+            .collect::<geltip::Result<Vec<_>>>()?;
+        Ok((0..runs[0].len())
+            .map(|i| {
+                let times = runs.iter().map(|s| s[i].1.as_secs_f64() * 1e3).collect();
+                (runs[0][i].0, median(times))
+            })
+            .collect())
+    };
+    for t in &taps {
+        add(0, timed(r, std::slice::from_ref(t))?);
+    }
+    add(1, timed(r, &taps)?);
+    for t in &taps {
+        let equal = timed(r, &vec![t.clone(); n])?;
+        add(
+            2,
+            equal
+                .into_iter()
+                .map(|(s, ms)| (s, ms / n as f64))
+                .collect(),
+        );
+    }
+    println!();
+    println!("stages of {n} of the paper's taps, ms for all {n} (median of {repeat}):");
+    println!(
+        "| {:<30} | {:>10} | {:>12} | {:>16} |",
+        "stage", "each alone", "in one wave", "equal-frame waves"
+    );
+    println!("|{:-<32}|{:->12}|{:->14}|{:->18}|", "", "", "", "");
+    let mut sums = [0.0; 3];
+    for (name, ms) in &table {
+        println!(
+            "| {name:<30} | {:>10.3} | {:>12.3} | {:>16.3} |",
+            ms[0], ms[1], ms[2]
+        );
+        for (s, m) in sums.iter_mut().zip(ms) {
+            *s += m;
+        }
+    }
+    println!(
+        "| {:<30} | {:>10.3} | {:>12.3} | {:>16.3} |",
+        "all", sums[0], sums[1], sums[2]
+    );
     Ok(())
 }
 

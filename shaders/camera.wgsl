@@ -165,9 +165,8 @@ fn write_hit(xy: vec2<u32>, hit: SkinHit) {
 // (the LED stage's shading, shaders/shared/shading.wgsl): the hit goes straight into the
 // pixel.
 @compute @workgroup_size(64)
-fn camera_shallow(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    use_frame(group.z);
-    let k = touched_index(id);
+fn camera_shallow(@builtin(local_invocation_id) local: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    let k = use_listed_frame_of(group, SHALLOW_BASE) * TOUCHED_WORKGROUP + local.x;
     if k >= atomicLoad(&counters[frame_word(SHALLOW_COUNT)]) {
         return;
     }
@@ -177,9 +176,8 @@ fn camera_shallow(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgro
 
 // The same for the deep pixels: marched.
 @compute @workgroup_size(64)
-fn camera_deep(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    use_frame(group.z);
-    let k = touched_index(id);
+fn camera_deep(@builtin(local_invocation_id) local: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    let k = use_listed_frame_of(group, DEEP_BASE) * TOUCHED_WORKGROUP + local.x;
     if k >= atomicLoad(&counters[frame_word(DEEP_COUNT)]) {
         return;
     }

@@ -82,8 +82,8 @@ fn penetration_at(u: vec2<f32>) -> f32 {
 }
 
 @compute @workgroup_size(8, 8)
-fn contact(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    use_frame(group.z);
+fn contact(@builtin(local_invocation_id) local: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    let id = rect_invocation(use_frame_of(group), frame.pressed_rect.z, local);
     if id.x >= frame.pressed_rect.z || id.y >= frame.pressed_rect.w {
         return;
     }

@@ -14,8 +14,8 @@ fn sample_penetration(t: vec2<f32>) -> f32 {
 }
 
 @compute @workgroup_size(8, 8)
-fn blend_meridian(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    use_frame(group.z);
+fn blend_meridian(@builtin(local_invocation_id) local: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    let id = rect_invocation(use_frame_of(group), frame.meridian_rect.z, local);
     // Over the meridian rect alone: beyond the kernels' reach of every pressed texel the
     // blends are zero, as the frame's clear left them.
     if id.x >= frame.meridian_rect.z || id.y >= frame.meridian_rect.w {
@@ -56,8 +56,8 @@ fn rotate(u: vec2<f32>, turn: vec2<f32>) -> vec2<f32> {
 }
 
 @compute @workgroup_size(8, 8)
-fn blend_azimuth(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    use_frame(group.z);
+fn blend_azimuth(@builtin(local_invocation_id) local: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    let id = rect_invocation(use_frame_of(group), frame.texel_rect.z, local);
     if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
         return;
     }
@@ -124,8 +124,8 @@ fn skin_with(u: vec2<f32>, h: f32) -> vec3<f32> {
 // buffer once the blends are done with it; the camera interpolates it, so shading is smooth
 // across texels. Mirror: src/render/elastomer.rs skin_normals.
 @compute @workgroup_size(8, 8)
-fn skin_normals(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    use_frame(group.z);
+fn skin_normals(@builtin(local_invocation_id) local: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    let id = rect_invocation(use_frame_of(group), frame.texel_rect.z, local);
     if id.x >= frame.texel_rect.z || id.y >= frame.texel_rect.w {
         return;
     }

@@ -25,29 +25,37 @@ fn list_if_touched(x: u32, y: u32) {
     }
     // One atomic path for both kinds (selects, not branches: see above).
     let deep = deepest >= SHALLOW_MM;
-    let k = list_touched(select(SHALLOW_COUNT, DEEP_COUNT, deep), select(SHALLOW_DISPATCH, DEEP_DISPATCH, deep));
+    let k = atomicAdd(&counters[frame_word(select(SHALLOW_COUNT, DEEP_COUNT, deep))], 1u);
     atomicStore(&counters[listed_at(k, deep)], pixel);
 }
 
-// Takes the next place of a kind of touched pixel (its count at the frame's word `count`)
-// and keeps the wave's dispatch over that kind (at word `dispatch`) large enough: the first
-// pixel of each workgroup's share sizes it.
-fn list_touched(count: u32, dispatch: u32) -> u32 {
-    let k = atomicAdd(&counters[frame_word(count)], 1u);
-    if k % TOUCHED_WORKGROUP == 0u {
-        grow_dispatch(dispatch, k / TOUCHED_WORKGROUP);
+// Once a wave's lists of a kind are whole (their counts at the frames' words `count`): each
+// listed frame's first workgroup of the pass over them (`per_group` entries a workgroup) at
+// its word `base`, after the frame before's, and the wave's indirect dispatch over all
+// (at word `dispatch`) as min(G, GROUPS_ROW) x ceil(G / GROUPS_ROW) workgroups.
+fn wave_bases(count: u32, base: u32, dispatch: u32, per_group: u32) {
+    var total = 0u;
+    for (var k = 0u; k < frames[0].frame.listed_frames; k++) {
+        let at = frames[k].frame.counters_at;
+        atomicStore(&counters[at + base], total);
+        total += (atomicLoad(&counters[at + count]) + per_group - 1u) / per_group;
     }
-    return k;
+    atomicStore(&counters[dispatch], min(total, GROUPS_ROW));
+    atomicStore(&counters[dispatch + 1u], (total + GROUPS_ROW - 1u) / GROUPS_ROW);
+    atomicStore(&counters[dispatch + 2u], 1u);
 }
 
-// Makes the wave's indirect dispatch at word `dispatch` reach workgroup g of every frame:
-// G groups in all as min(G, TOUCHED_MAX_GROUPS) x ceil(G / TOUCHED_MAX_GROUPS) x the wave's
-// listed frames (sized by the frame of the longest list; the others' extra workgroups
-// return at once).
-fn grow_dispatch(dispatch: u32, g: u32) {
-    atomicMax(&counters[dispatch], min(g + 1u, TOUCHED_MAX_GROUPS));
-    atomicMax(&counters[dispatch + 1u], g / TOUCHED_MAX_GROUPS + 1u);
-    atomicStore(&counters[dispatch + 2u], frame.listed_frames);
+// After select_tiles: the pass over the tile lists (select_listed), a workgroup a tile.
+@compute @workgroup_size(1)
+fn tile_bases() {
+    wave_bases(TILE_COUNT, TILE_BASE, SELECT_DISPATCH, 1u);
+}
+
+// After select_listed: the camera's passes over the shallow and the deep pixels.
+@compute @workgroup_size(1)
+fn touched_bases() {
+    wave_bases(SHALLOW_COUNT, SHALLOW_BASE, SHALLOW_DISPATCH, TOUCHED_WORKGROUP);
+    wave_bases(DEEP_COUNT, DEEP_BASE, DEEP_DISPATCH, TOUCHED_WORKGROUP);
 }
 
 fn tiles_x() -> u32 {
@@ -137,8 +145,8 @@ fn range_moved(r: vec4<i32>) -> bool {
 // Displaced texels lie in frame.texel_rect (the height map is zero elsewhere). Mirror:
 // src/render/touched.rs select_tiles.
 @compute @workgroup_size(8)
-fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
-    use_frame(group.z);
+fn select_tiles(@builtin(local_invocation_id) local: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>) {
+    let id = vec2<u32>(use_frame_of(group) * 8u + local.x, 0u);
     let r = frame.pixel_rect;
     let tx0 = r.x / PIXEL_TILE;
     let ty0 = r.y / PIXEL_TILE;
@@ -160,9 +168,8 @@ fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup
     if !moved {
         return;
     }
-    // One workgroup of select_listed per tile.
+    // One workgroup of select_listed per tile (tile_bases sizes its pass).
     let e = atomicAdd(&counters[frame_word(TILE_COUNT)], 1u);
-    grow_dispatch(SELECT_DISPATCH, e);
     atomicStore(&counters[frame.list_at + list_capacity() + e], tile);
 }
 
@@ -171,8 +178,7 @@ fn select_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup
 // rect alone). Mirror: src/render/touched.rs select_touched.
 @compute @workgroup_size(8, 8)
 fn select_listed(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    use_frame(group.z);
-    let e = group.y * TOUCHED_MAX_GROUPS + group.x;
+    let e = use_listed_frame_of(group, TILE_BASE);
     if e >= atomicLoad(&counters[frame_word(TILE_COUNT)]) {
         return;
     }

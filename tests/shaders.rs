@@ -541,6 +541,8 @@ fn uniform_structs_equal_the_shaders() {
         member!(F, image_size[0] as "image_w"),
         member!(F, image_size[1] as "image_h"),
         member!(F, list_at),
+        member!(F, group_base),
+        member!(F, group_items),
     ];
     let source = geltip::gpu::shaders::compose("contact").unwrap();
     let module = naga::front::wgsl::parse_str(&source).unwrap();

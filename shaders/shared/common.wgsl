@@ -111,20 +111,24 @@ struct Frame {
     image_at: u32,
     counters_at: u32,
     field_at: u32,
-    // Frames of the wave whose pixels are selected and cast (touched.wgsl grow_dispatch).
+    // Frames of the wave whose pixels are selected and cast (touched.wgsl wave_bases).
     listed_frames: u32,
     // The size of the rect the image buffers hold (from image_x, image_y).
     image_w: u32,
     image_h: u32,
     // The word of `counters` where the frame's touched list starts, its tile list after it.
     list_at: u32,
+    // A dispatch over the bound frames' work side by side (use_frame_of): the first of the
+    // dispatch's workgroups that are this frame's, and how many frames the dispatch binds.
+    group_base: u32,
+    group_items: u32,
 }
 
 // A frame uniform in its place of the frame uniforms' buffer (src/render/gpu/resources.rs
 // UNIFORM_STRIDE bytes apart).
 struct FrameSlot {
     frame: Frame,
-    pad: array<vec4<u32>, 2>,
+    pad: vec4<u32>,
 }
 
 // The sensor's lens model, ray steps, kernel taps, LED count and shading exponents (the
@@ -219,6 +223,35 @@ fn use_frame(k: u32) {
     frame = frames[k].frame;
 }
 
+// A dispatch over the bound frames' work side by side, each frame's workgroups after the
+// frame before's (src/render/gpu/frame.rs Binds::spread), rows of GROUPS_ROW: makes
+// current the frame workgroup `group` works for (the last whose group_base is at most its
+// place, by bisection) and returns its place among that frame's workgroups. Why: sized by
+// the largest frame, every workgroup of the smaller frames' share runs on llvmpipe only to
+// find it has nothing to do.
+fn use_frame_of(group: vec3<u32>) -> u32 {
+    let w = group.y * GROUPS_ROW + group.x;
+    var lo = 0u;
+    var hi = frames[0].frame.group_items;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if frames[mid].frame.group_base <= w {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    use_frame(lo);
+    return w - frame.group_base;
+}
+
+// Invocation `local` of workgroup g of a frame's square workgroups over a rect `width`
+// wide, row by row: its place in the rect.
+fn rect_invocation(g: u32, width: u32, local: vec3<u32>) -> vec2<u32> {
+    let across = max((width + 7u) / 8u, 1u);
+    return vec2<u32>(g % across, g / across) * 8u + local.xy;
+}
+
 // Word w of the frame's counters.
 fn frame_word(w: u32) -> u32 {
     return frame.counters_at + w;
@@ -249,15 +282,20 @@ const DEEP_DISPATCH: u32 = 8u;
 // select_listed over them (three words).
 const TILE_COUNT: u32 = 3u;
 const SELECT_DISPATCH: u32 = 12u;
+// The first workgroup of a frame's share of the wave's passes over the tile lists, the
+// shallow and the deep pixels (touched.wgsl wave_bases).
+const TILE_BASE: u32 = 16u;
+const SHALLOW_BASE: u32 = 17u;
+const DEEP_BASE: u32 = 18u;
 // Words of a frame's counters (the rest of a frame's words are its lists, from
 // frame.list_at: the touched pixels' indices (y * width + x), a place per pixel of the
 // image, then the tile list's tile indices, row by row on the image's grid of tiles).
 const TOUCHED_LIST: u32 = 64u;
 // Invocations per workgroup of the passes over the touched list.
 const TOUCHED_WORKGROUP: u32 = 64u;
-// Most workgroups those passes dispatch along x (WebGPU's least limit per dimension); a
-// longer list goes on in further rows of workgroups (y).
-const TOUCHED_MAX_GROUPS: u32 = 65535u;
+// Most workgroups a dispatch over a list or over frames side by side has along x (WebGPU's
+// least limit per dimension); more go on in further rows of workgroups (y).
+const GROUPS_ROW: u32 = 65535u;
 
 // ---- Lens (src/lens.rs) ----
 

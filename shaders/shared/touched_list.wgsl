@@ -19,8 +19,23 @@ fn listed_pixel(k: u32, deep: bool) -> vec2<u32> {
     return vec2<u32>(pixel % sensor.image_size.x, pixel / sensor.image_size.x);
 }
 
-// Place on the touched list of invocation `id` of a pass over it (TOUCHED_WORKGROUP
-// invocations a workgroup, at most TOUCHED_MAX_GROUPS workgroups a row).
-fn touched_index(id: vec3<u32>) -> u32 {
-    return id.y * TOUCHED_MAX_GROUPS * TOUCHED_WORKGROUP + id.x;
+// A pass over the wave's listed frames' lists, each frame's workgroups after the frame
+// before's (touched.wgsl wave_bases left the first of each frame's at its counter word
+// `base`), rows of GROUPS_ROW: makes current the frame workgroup `group` works for (by
+// bisection) and returns its place among that frame's workgroups. Why not a pass sized by
+// the longest list: on llvmpipe every workgroup of the shorter lists' share would run.
+fn use_listed_frame_of(group: vec3<u32>, base: u32) -> u32 {
+    let w = group.y * GROUPS_ROW + group.x;
+    var lo = 0u;
+    var hi = frames[0].frame.listed_frames;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if atomicLoad(&counters[frames[mid].frame.counters_at + base]) <= w {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    use_frame(lo);
+    return w - atomicLoad(&counters[frame_word(base)]);
 }

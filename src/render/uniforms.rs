@@ -113,17 +113,23 @@ pub struct FrameUniform {
     pub image_at: u32,
     pub counters_at: u32,
     pub field_at: u32,
-    /// Frames of the wave whose pixels are selected and cast: the indirect dispatches'
-    /// third dimension (`touched.wgsl` grow_dispatch).
+    /// Frames of the wave whose pixels are selected and cast: the frames the passes over
+    /// their lists find their workgroups among (`touched.wgsl` wave_bases).
     pub listed_frames: u32,
     /// The size of the rect the image buffers hold (with `image_origin`).
     pub image_size: [u32; 2],
     /// The word of the counters binding where the frame's touched list starts, its tile
     /// list after it (`shared/touched_list.wgsl`).
     pub list_at: u32,
+    /// A dispatch over its frames' work side by side (`Binds::spread`): the first of the
+    /// dispatch's workgroups that are this frame's, and the frames the dispatch binds
+    /// (`shared/common.wgsl` use_frame_of).
+    pub group_base: u32,
+    pub group_items: u32,
+    pub _pad: [u32; 2],
 }
 
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 224);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 240);
 
 /// `object_kind` of a loaded mesh's baked SDF grid (WGSL `GRID_OBJECT`).
 pub const GRID_OBJECT: u32 = 100;

@@ -79,10 +79,11 @@ fn over_largest(rects: impl Iterator<Item = Rect>, least: u32, frames: u32) -> G
 
 /// How a wave's frames start ([`Renderer::record_wave`]).
 pub(super) enum Start {
-    /// A frame alone: copies and clears (on a software device these are memory copies,
-    /// where a pass would write pixel by pixel), the frame's slot, image offset and held
-    /// rect.
-    Copies(u64, u64, Option<Rect>),
+    /// Copies and clears, the frames' image offsets and held rects. For a frame
+    /// alone, and for every wave on a software device, where these are memory copies and a
+    /// pass writes pixel by pixel (8 of the paper's taps: 1.2 ms of copies against 5.6 for
+    /// the pass, `cargo bench --bench render -- --wave-stages 8`).
+    Copies(Vec<(u64, Option<Rect>)>),
     /// Several: the start pass over all of them (`shaders/start.wgsl`).
     Pass(Dispatches),
 }
@@ -101,8 +102,8 @@ type Dispatches = Vec<(usize, Groups)>;
 pub(super) struct Wave {
     /// Its first frame's slot: the indirect dispatches' arguments are there.
     first_slot: u64,
-    /// The heightfield its frames clear and refresh, if any presses it.
-    span: Option<LaneSpan>,
+    /// The heightfield its frames clear and refresh (none if no frame presses it).
+    spans: Vec<LaneSpan>,
     start: Start,
     /// Per round (each frame's k-th contact), the dispatches of each kind of object.
     contacts: Vec<Vec<(u32, usize, Groups)>>,
@@ -161,6 +162,50 @@ impl<'c> Binds<'c> {
         self.groups.push((self.uniforms.len(), slots, grid));
         self.uniforms.extend_from_slice(chunk);
         self.groups.len() - 1
+    }
+
+    /// Dispatches over `items` (uniforms and the workgroups each needs) side by side: as many
+    /// as [`FRAMES_BOUND`] a dispatch, each frame's workgroups after the one before's (its
+    /// uniform given its first workgroup and the dispatch's frames), the dispatch sized by
+    /// their sum (`shaders/shared/common.wgsl` use_frame_of).
+    fn spread(
+        &mut self,
+        items: &[(FrameUniform, u32)],
+        slots: WaveRange,
+        grid: Option<&'c Object>,
+    ) -> Vec<(usize, Groups)> {
+        let grid = grid.filter(|o| matches!(o, Object::Mesh { .. }));
+        items
+            .chunks(FRAMES_BOUND as usize)
+            .map(|chunk| {
+                let mut base = 0;
+                let uniforms: Vec<FrameUniform> = chunk
+                    .iter()
+                    .map(|&(mut u, n)| {
+                        u.group_base = base;
+                        u.group_items = chunk.len() as u32;
+                        base += n;
+                        u
+                    })
+                    .collect();
+                (self.group_of(&uniforms, slots, grid), Groups::spread(base))
+            })
+            .collect()
+    }
+
+    /// [`Self::spread`] over items with the rects their passes run over, a square
+    /// workgroup a [`WORKGROUP`]-square of each rect.
+    fn over_rects(
+        &mut self,
+        items: &[(FrameUniform, Rect)],
+        slots: WaveRange,
+        grid: Option<&'c Object>,
+    ) -> Vec<(usize, Groups)> {
+        let sized: Vec<(FrameUniform, u32)> = items
+            .iter()
+            .map(|&(u, r)| (u, groups(r.w, WORKGROUP) * groups(r.h, WORKGROUP)))
+            .collect();
+        self.spread(&sized, slots, grid)
     }
 
     /// A dispatch each for `items` (with the rects their passes run over), sized by the
@@ -258,14 +303,8 @@ impl Renderer {
     fn run_frames(&mut self, scenes: &[Scene]) -> Result<(ReadFrames, (u64, u64))> {
         let contacts: Vec<&Prepared> = scenes.iter().flat_map(|(c, _)| c).collect();
         let offsets = self.field_offsets(&contacts)?;
-        let mut plans: Vec<FramePlan> = (0..)
-            .zip(scenes)
-            .map(|(slot, (contacts, seed))| self.plan(slot, contacts, *seed))
-            .collect();
+        let plans = self.plan_frames(scenes.iter().map(|(c, seed)| (&c[..], *seed)));
         let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
-        for (p, at) in plans.iter_mut().zip(packed_offsets(&rects).0) {
-            p.image_offset = at;
-        }
         let scene_contacts: Vec<&[Prepared]> = scenes.iter().map(|(c, _)| &c[..]).collect();
         let (groups, waves) = self.waves(&plans, &scene_contacts, &offsets);
         // One wave goes into the readback's submission; several are recorded side by side
@@ -306,6 +345,23 @@ impl Renderer {
         Ok(offsets)
     }
 
+    /// The plans of a submission's frames (their contacts and noise seeds), in slots from
+    /// 0, their image rects packed in order.
+    pub(super) fn plan_frames<'s>(
+        &self,
+        scenes: impl Iterator<Item = (&'s [Prepared], u32)>,
+    ) -> Vec<FramePlan> {
+        let mut plans: Vec<FramePlan> = (0..)
+            .zip(scenes)
+            .map(|(slot, (contacts, seed))| self.plan(slot, contacts, seed))
+            .collect();
+        let rects: Vec<Option<Rect>> = plans.iter().map(|p| p.holding).collect();
+        for (p, at) in plans.iter_mut().zip(packed_offsets(&rects).0) {
+            p.image_offset = at;
+        }
+        plans
+    }
+
     /// The plan of the frame of `contacts` in `slot`.
     pub(super) fn plan(&self, slot: u64, contacts: &[Prepared], seed: u32) -> FramePlan {
         let footprints: Vec<_> = contacts.iter().filter_map(|p| p.footprint).collect();
@@ -335,33 +391,64 @@ impl Renderer {
     }
 
     /// The heightfield a wave of frames (`plans`, on lanes in order) clears and refreshes:
-    /// from the first lane its frames press to the last, over every texel their frames
-    /// press and every texel those lanes' maps may hold non-zero (their last frames'), so
-    /// that the maps are zero outside the texels their frames press afterwards (clearing
-    /// and refreshing a zero texel changes nothing). The heightfield's bookkeeping moves on
-    /// to the wave (the waves of a submission run in order).
-    fn wave_span(&mut self, plans: &[FramePlan]) -> Option<LaneSpan> {
+    /// every texel their frames press and every texel their lanes' maps may hold non-zero
+    /// (their last frames'), so that the maps are zero outside the texels their frames press
+    /// afterwards (clearing and refreshing a zero texel changes nothing). On a GPU one span,
+    /// from the first lane its frames press to the last, over the union of those texels (a
+    /// copy each, however many lanes: each copy waits on a barrier); on a software device a
+    /// span a lane, over that lane's own texels (copies are memory copies there, and the
+    /// union of a wave's mixed contacts is most of every lane). The heightfield's
+    /// bookkeeping moves on to the wave (the waves of a submission run in order).
+    fn wave_spans(&mut self, plans: &[FramePlan]) -> Vec<LaneSpan> {
+        if self.software() {
+            let mut spans = Vec::new();
+            for p in plans {
+                let lane = self.lane_of(p.slot);
+                let rect = span(
+                    &[p.texel_span(), self.dirty[lane]]
+                        .into_iter()
+                        .flatten()
+                        .collect::<Vec<_>>(),
+                );
+                self.dirty[lane] = p.texel_span();
+                if let Some(rect) = rect {
+                    let lane = lane as u32;
+                    spans.push(LaneSpan {
+                        first: lane,
+                        last: lane,
+                        rect,
+                    });
+                }
+            }
+            return spans;
+        }
         let pressed = || {
             plans
                 .iter()
                 .filter_map(|p| Some((self.lane_of(p.slot), p.texel_span()?)))
         };
-        let first = pressed().map(|(l, _)| l).min()?;
-        let last = pressed().map(|(l, _)| l).max()?;
+        let (Some(first), Some(last)) = (
+            pressed().map(|(l, _)| l).min(),
+            pressed().map(|(l, _)| l).max(),
+        ) else {
+            return Vec::new();
+        };
         let texels = pressed().map(|(_, t)| t);
         let dirty = self.dirty[first..=last].iter().flatten().copied();
-        let rect = texels.chain(dirty).reduce(|a, b| a.union(&b))?;
+        let Some(rect) = texels.chain(dirty).reduce(|a, b| a.union(&b)) else {
+            return Vec::new();
+        };
         for p in plans {
             let lane = self.lane_of(p.slot);
             if (first..=last).contains(&lane) {
                 self.dirty[lane] = p.texel_span();
             }
         }
-        Some(LaneSpan {
+        vec![LaneSpan {
             first: first as u32,
             last: last as u32,
             rect,
-        })
+        }]
     }
 
     /// The waves of the frames `plans` plan, of the contacts of each (their fields at
@@ -377,11 +464,11 @@ impl Renderer {
         let mut waves = Vec::new();
         let mut fields = field_offsets;
         for (plans, scenes) in plans.chunks(self.lanes).zip(scenes.chunks(self.lanes)) {
-            let span = self.wave_span(plans);
+            let spans = self.wave_spans(plans);
             let contacts = scenes.iter().map(|c| c.len()).sum::<usize>();
             let (mine, rest) = fields.split_at(contacts.min(fields.len()));
             fields = rest;
-            waves.push(self.wave(&mut binds, plans, scenes, mine, span));
+            waves.push(self.wave(&mut binds, plans, scenes, mine, spans));
         }
         self.resources.write_uniforms(self.ctx, &binds.uniforms);
         let res = &self.resources;
@@ -409,7 +496,7 @@ impl Renderer {
         plans: &[FramePlan],
         scenes: &[&'c [Prepared]],
         fields: &[u64],
-        span: Option<LaneSpan>,
+        spans: Vec<LaneSpan>,
     ) -> Wave {
         let res = &self.resources;
         let first_slot = plans.first().map_or(0, |p| p.slot);
@@ -458,8 +545,11 @@ impl Renderer {
                 u
             })
             .collect();
+        let copies = plans.len() == 1 || self.software();
         let start = match plans {
-            [one] => Start::Copies(one.slot, one.image_offset, one.holding),
+            _ if copies => {
+                Start::Copies(plans.iter().map(|p| (p.image_offset, p.holding)).collect())
+            }
             _ => {
                 let held = plans.iter().filter_map(|p| p.holding);
                 // At least a workgroup a frame: the first clears its counters.
@@ -470,7 +560,7 @@ impl Renderer {
         };
         let mut wave = Wave {
             first_slot,
-            span,
+            spans,
             start,
             ..Wave::default()
         };
@@ -520,28 +610,26 @@ impl Renderer {
             all
         };
         let meridians = pieces(|p| &p.meridians, |u, r| u.meridian_rect = rect4(Some(r)));
-        wave.meridians = binds.over(&meridians, slots);
+        wave.meridians = binds.over_rects(&meridians, slots, None);
         let texels = pieces(|p| &p.texels, |u, r| u.texel_rect = rect4(Some(r)));
-        wave.texels = binds.over(&texels, slots);
+        wave.texels = binds.over_rects(&texels, slots, None);
         let listed: Vec<(FrameUniform, Rect)> = plans
             .iter()
             .zip(&placed)
             .filter_map(|(p, &u)| Some((u, p.pixels?)))
             .collect();
         if !listed.is_empty() {
-            let uniforms: Vec<FrameUniform> = listed.iter().map(|l| l.0).collect();
+            let items: Vec<(FrameUniform, u32)> = listed
+                .iter()
+                .map(|&(u, r)| {
+                    let (columns, rows) = tiles_over(r);
+                    let tiles = columns.len() as u32 * rows.len() as u32;
+                    (u, groups(tiles, SELECT_TILES_WORKGROUP))
+                })
+                .collect();
             // Every listed frame is in one group: the indirect dispatches' third dimension is
             // the wave's listed frames (at most the lanes, at most FRAMES_BOUND).
-            let (k, n) = binds.add(&uniforms, slots, None)[0];
-            let most = listed.iter().map(|&(_, r)| {
-                let (columns, rows) = tiles_over(r);
-                columns.len() as u32 * rows.len() as u32
-            });
-            let tiles = most.max().unwrap_or(0);
-            wave.listed = Some((
-                k,
-                Groups::Direct(groups(tiles, SELECT_TILES_WORKGROUP), 1, n),
-            ));
+            wave.listed = Some(binds.spread(&items, slots, None)[0]);
         }
         if self.sensor.config.render.noise.any() {
             let whole = super::resources::whole_image(&self.sensor);
@@ -602,13 +690,11 @@ impl Renderer {
                 })
                 .collect()
         };
-        if let Some(span) = wave.span {
+        for &span in &wave.spans {
             hf.clear(rec.copies(Map::ALL.len() as u64), span);
         }
         match &wave.start {
-            Start::Copies(slot, image, holding) => {
-                self.record_frame_start(rec, *slot, *image, *holding)
-            }
+            Start::Copies(frames) => self.record_frame_starts(rec, wave.first_slot, frames),
             Start::Pass(start) => {
                 for b in batches(start) {
                     p.start.dispatch(rec, b);
@@ -617,7 +703,7 @@ impl Renderer {
         }
         rec.stage_done(Stage::Start)?;
         let refresh = |rec: &mut Recorder<'a>, map: Map| {
-            if let Some(span) = wave.span {
+            for &span in &wave.spans {
                 hf.refresh(rec.copies(1), map, span);
             }
         };
@@ -655,6 +741,7 @@ impl Renderer {
         if let Some(b) = listed {
             copy_dispatch_args(rec.copies(1), res, wave.first_slot, TILE_LIST_ARGS);
             p.touched.dispatch_listed(rec, wave.first_slot, b.bind);
+            p.touched.record_touched_bases(rec, b.bind);
         }
         rec.stage_done(Stage::Select)?;
         if let Some(b) = listed {
@@ -668,25 +755,31 @@ impl Renderer {
         Ok(())
     }
 
-    /// A frame's start, for a frame alone: as the start pass, its image buffers hold its
-    /// rect of the image, the reference's pixels there and zero indentation, and its
-    /// counters are zero.
-    fn record_frame_start(
+    /// The starts of a wave's frames by copies (a frame alone, or a software device's
+    /// wave): as the start pass, their image buffers hold their rects of the image, the
+    /// reference's pixels there and zero indentation, and their counters are zero. The
+    /// frames' rects lie packed in order, as do their counters, so each clear is one range.
+    fn record_frame_starts(
         &self,
         rec: &mut Recorder,
-        slot: u64,
-        offset: u64,
-        holding: Option<Rect>,
+        first_slot: u64,
+        frames: &[(u64, Option<Rect>)],
     ) {
         let res = &self.resources;
-        if let Some(r) = holding {
-            let encoder = rec.copies(2);
-            res.copy_reference(encoder, offset, r);
-            encoder.clear_buffer(&res.indentation, offset, Some(held_bytes(r)));
+        let held = frames.iter().filter_map(|&(at, r)| Some((at, r?)));
+        for (offset, r) in held.clone() {
+            res.copy_reference(rec.copies(1), offset, r);
         }
-        let counters = slot * res.counter_bytes;
-        let encoder = rec.copies(1);
-        encoder.clear_buffer(&res.counters, counters, Some(COUNTER_HEADER_BYTES));
+        let first = held.clone().next().map(|(at, _)| at);
+        let end = held.map(|(at, r)| at + held_bytes(r)).next_back();
+        if let (Some(first), Some(end)) = (first, end) {
+            rec.copies(1)
+                .clear_buffer(&res.indentation, first, Some(end - first));
+        }
+        let counters = first_slot * res.counter_bytes;
+        let bytes = frames.len() as u64 * COUNTER_HEADER_BYTES;
+        rec.copies(1)
+            .clear_buffer(&res.counters, counters, Some(bytes));
     }
 }
 
@@ -710,10 +803,8 @@ fn contact_dispatches<'c>(
         }
         done.push(k);
         let alike: Vec<_> = round.iter().filter(|i| key(i) == k).collect();
-        let uniforms: Vec<FrameUniform> = alike.iter().map(|i| i.1).collect();
-        let mut rects = alike.iter().map(|i| i.2);
-        for (group, n) in binds.add(&uniforms, slots, Some(item.0)) {
-            let g = over_largest(rects.by_ref().take(n as usize), 0, n);
+        let items: Vec<(FrameUniform, Rect)> = alike.iter().map(|i| (i.1, i.2)).collect();
+        for (group, g) in binds.over_rects(&items, slots, Some(item.0)) {
             out.push((k.0, group, g));
         }
     }

@@ -27,6 +27,11 @@ wgsl_constants! {
     SHALLOW_DISPATCH = 4;
     DEEP_DISPATCH = 8;
     SELECT_DISPATCH = 12;
+    /// Words: the first workgroup of the frame's share of the wave's passes over the tile
+    /// lists, the shallow and the deep pixels (`touched.wgsl` wave_bases).
+    TILE_BASE = 16;
+    SHALLOW_BASE = 17;
+    DEEP_BASE = 18;
     /// Words of a frame's counters (cleared and read back; its lists are elsewhere).
     TOUCHED_LIST = 64;
     /// Invocations per workgroup of the camera's passes over the touched list.
@@ -37,6 +42,9 @@ wgsl_constants! {
     PROBE_TILE_STRIDE = 3;
     /// Pixels per side of a tile.
     PIXEL_TILE = 8;
+    /// Most workgroups along x of a dispatch over a list or over frames side by side (more
+    /// go on in rows along y).
+    GROUPS_ROW = 65535;
 }
 
 /// Bytes of a frame's counters: what is cleared and read back.
@@ -83,6 +91,8 @@ pub const WORKGROUP_SIZES: &[(&str, &str, [u32; 3])] = &[
     ("elastomer", "skin_normals", [WORKGROUP, WORKGROUP, 1]),
     ("touched", "probe_tiles_of_rays", [LIST_WORKGROUP, 1, 1]),
     ("touched", "select_tiles", [SELECT_TILES_WORKGROUP, 1, 1]),
+    ("touched", "tile_bases", [1, 1, 1]),
+    ("touched", "touched_bases", [1, 1, 1]),
     // A workgroup a tile: a pixel an invocation.
     ("touched", "select_listed", [PIXEL_TILE, PIXEL_TILE, 1]),
     ("camera", "camera", [WORKGROUP, WORKGROUP, 1]),

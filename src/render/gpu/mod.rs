@@ -59,18 +59,15 @@ pub fn default_batch(adapter: &wgpu::AdapterInfo) -> usize {
 }
 
 /// Frames of a submission whose stages are recorded side by side unless told otherwise
-/// ([`Renderer::set_lanes`]): one on a software device, where the frames' work runs on the
-/// same cores either way; on a GPU, where one frame's stage is too little work to fill it
-/// and each dispatch and copy costs its own fixed time (a barrier), a batch's worth, as
-/// many as [`LANES_BYTES`] of heightfields hold (a lane's heightfield of `texels` per side
-/// takes 48 bytes a texel, its buffers and maps). The renderer takes fewer where the
-/// device cannot bind that many at once.
+/// ([`Renderer::set_lanes`]): a batch's worth, as many as [`LANES_BYTES`] of heightfields
+/// hold (a lane's heightfield of `texels` per side takes 48 bytes a texel, its buffers and
+/// maps). On a GPU one frame's stage is too little work to fill it and each dispatch and
+/// copy costs its own fixed time (a barrier); on a software device each dispatch and pass
+/// has a fixed cost too, and a wave's dispatches run only its frames' own workgroups. The
+/// renderer takes fewer where the device cannot bind that many at once.
 pub fn default_lanes(adapter: &wgpu::AdapterInfo, texels: u32) -> usize {
     let lane_bytes = 48 * texels as u64 * texels as u64;
-    match adapter.device_type {
-        wgpu::DeviceType::Cpu => 1,
-        _ => (LANES_BYTES / lane_bytes.max(1)).clamp(1, default_batch(adapter) as u64) as usize,
-    }
+    (LANES_BYTES / lane_bytes.max(1)).clamp(1, default_batch(adapter) as u64) as usize
 }
 
 /// GPU memory the default lanes' heightfields take at most.
@@ -142,6 +139,13 @@ pub struct Renderer {
 }
 
 impl Renderer {
+    /// Whether the device is a software one (lavapipe): its copies are memory copies and
+    /// its passes run on the same cores, so a wave's starts and heightfield copies are
+    /// recorded a frame at a time rather than as one pass or copy for the wave.
+    fn software(&self) -> bool {
+        self.ctx.adapter_info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Compiles the pipelines, allocates the buffers and renders the empty finger once, on
     /// the process's shared device.
     pub fn new(sensor: &Sensor) -> Result<Renderer> {

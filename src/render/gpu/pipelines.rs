@@ -30,6 +30,8 @@ pub(super) struct TouchedPipelines {
     pub probe_tiles: wgpu::ComputePipeline,
     pub select_tiles: wgpu::ComputePipeline,
     pub select_listed: wgpu::ComputePipeline,
+    pub tile_bases: wgpu::ComputePipeline,
+    pub touched_bases: wgpu::ComputePipeline,
 }
 
 /// Stage 3: every pixel of the reference frame; a contact frame's shallow and deep pixels.
@@ -81,6 +83,8 @@ impl Pipelines {
                 probe_tiles: p("touched", "probe_tiles_of_rays")?,
                 select_tiles: p("touched", "select_tiles")?,
                 select_listed: p("touched", "select_listed")?,
+                tile_bases: p("touched", "tile_bases")?,
+                touched_bases: p("touched", "touched_bases")?,
             },
             camera: CameraPipelines {
                 reference: p("camera", "camera")?,

@@ -1,7 +1,7 @@
 //! Recording a submission: the stages' dispatches go into as few compute passes as the
 //! copies between them allow, and profiling times the stages a frame marks.
 
-use super::layout::{groups, WORKGROUP};
+use super::layout::{groups, GROUPS_ROW, WORKGROUP};
 use crate::error::{GeltipError, Result};
 use crate::gpu::readback::read_buffer;
 use crate::gpu::GpuContext;
@@ -21,6 +21,12 @@ impl Groups {
     /// frame.
     pub fn over(r: Rect) -> Groups {
         Groups::Direct(groups(r.w, WORKGROUP), groups(r.h, WORKGROUP), 1)
+    }
+
+    /// `n` workgroups in rows of [`GROUPS_ROW`] (a dispatch over frames side by side:
+    /// `shaders/shared/common.wgsl` use_frame_of).
+    pub fn spread(n: u32) -> Groups {
+        Groups::Direct(n.min(GROUPS_ROW), n.div_ceil(GROUPS_ROW), 1)
     }
 
     /// Whether the dispatch runs any workgroup (an indirect one may still run none).

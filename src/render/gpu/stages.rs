@@ -86,14 +86,22 @@ impl TouchedPipelines {
     }
 
     /// The frames' tile lists: the tiles of each one's pixel rect whose probes see a
-    /// displaced texel, into the pending pass.
+    /// displaced texel, into the pending pass; then where each frame's share of the pass
+    /// over them starts, and that pass's size.
     pub fn record_tiles<'a>(&'a self, rec: &mut Recorder<'a>, b: Batch<'a>) {
         rec.dispatch(&self.select_tiles, b.bind, b.groups);
+        rec.dispatch(&self.tile_bases, b.bind, Groups::Direct(1, 1, 1));
+    }
+
+    /// Once the touched lists are whole: where each frame's share of the camera's passes
+    /// over them starts, and those passes' sizes.
+    pub fn record_touched_bases<'a>(&'a self, rec: &mut Recorder<'a>, bind: &'a wgpu::BindGroup) {
+        rec.dispatch(&self.touched_bases, bind, Groups::Direct(1, 1, 1));
     }
 
     /// The touched lists of the frames of the wave whose first frame is in `slot`, from the
-    /// listed tiles: a pass sized by the longest tile list, whose arguments
-    /// [`copy_dispatch_args`] copied.
+    /// listed tiles: a pass over all the wave's tile lists, each frame's workgroups after
+    /// the one before's, whose arguments [`copy_dispatch_args`] copied.
     pub fn dispatch_listed<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
@@ -141,8 +149,8 @@ impl CameraPipelines {
     }
 
     /// Stage 3 of contact frames: the passes over the touched lists of the wave whose first
-    /// frame is in `slot`, the shallow pixels' and the deep ones', sized by the longest
-    /// ([`copy_dispatch_args`]).
+    /// frame is in `slot`, the shallow pixels' and the deep ones', each over all the wave's
+    /// lists of its kind side by side ([`copy_dispatch_args`]).
     pub fn dispatch_touched<'a>(
         &'a self,
         rec: &mut Recorder<'a>,
