@@ -4,9 +4,29 @@
 use rayon::prelude::*;
 use std::ops::Range;
 
+/// Solves the n x n system `a x = b` (row-major); `None` when it is singular. By
+/// [`gaussian_elimination`]; with the `nalgebra-solve` feature by nalgebra's LU, for paired
+/// runs (`cargo bench --bench solve --features nalgebra-solve` compares the two).
+pub fn solve_dense(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+    #[cfg(feature = "nalgebra-solve")]
+    return nalgebra_lu(a, b, n);
+    #[cfg(not(feature = "nalgebra-solve"))]
+    return gaussian_elimination(a, b, n);
+}
+
+/// [`solve_dense`] by nalgebra's LU with partial pivoting.
+#[cfg(feature = "nalgebra-solve")]
+pub fn nalgebra_lu(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+    let m = nalgebra::DMatrix::from_row_slice(n, n, a);
+    let x = m.lu().solve(&nalgebra::DVector::from_column_slice(b))?;
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.as_slice().to_vec())
+}
+
 /// Solves the n x n system `a x = b` (row-major) by Gaussian elimination with partial
 /// pivoting; `None` when it is singular.
-pub fn solve_dense(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+pub fn gaussian_elimination(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
     let mut m: Vec<f64> = a.to_vec();
     let mut x: Vec<f64> = b.to_vec();
     for col in 0..n {
