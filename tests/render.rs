@@ -268,7 +268,10 @@ fn batches_of_any_size_give_the_frames_of_one_at_a_time() {
     let mut scenes: Vec<Vec<Press>> = list.chunks(2).map(|c| c.to_vec()).collect();
     // Among them a press too shallow to move the skin: its passes run, its lists stay
     // empty, so a wave holds a frame of no touched pixels between others.
-    scenes.insert(2, vec![contact(Solid::Sphere, Place::Rotation(30.0), 0.004)]);
+    scenes.insert(
+        2,
+        vec![contact(Solid::Sphere, Place::Rotation(30.0), 0.004)],
+    );
     let each: Vec<_> = scenes.iter().map(|s| r.render_scene(s).unwrap()).collect();
     // Frames recorded side by side (lanes: each stage of each frame before the next
     // stage, each frame on a heightfield of its own) or one after the other.

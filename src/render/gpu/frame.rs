@@ -7,13 +7,17 @@
 //! from its own penetration field, read back with the frames.
 //!
 //! The frames of a wave ([`Renderer::lanes`] of them, each on its own heightfield) are
-//! recorded stage by stage, each stage one dispatch over all of them: the frame (or piece
-//! of a frame) is the third coordinate of its workgroups, and its uniform the one at that
-//! place of the dispatch's bind group; a dispatch sized on the GPU is sized by the wave's
-//! longest list. The copies between stages (the maps' refreshes, the heightfield's clears,
-//! the indirect dispatches' arguments) are one each for the wave. Why: wgpu puts a barrier
+//! recorded stage by stage, each stage one dispatch over all of them sized by the sum of
+//! their work: a frame's (or a piece's) workgroups follow the one before's, its uniform (at
+//! its place of the dispatch's bind group) says where its share starts, and a workgroup
+//! finds its frame by bisection (`use_frame_of` in `shaders/shared/common.wgsl`); a pass
+//! over lists the GPU fills (tiles, touched pixels) gets its shares and its size from a
+//! one-invocation pass once the lists are whole (`wave_bases` in `shaders/touched.wgsl`).
+//! On a GPU the copies between stages (the maps' refreshes, the heightfield's clears, the
+//! indirect dispatches' arguments) are one each for the wave; on a software device, where
+//! a copy is a memory copy, the heightfield's are a lane's own. Why: wgpu puts a barrier
 //! before every dispatch and copy that writes, and on a GPU those barriers, not the work,
-//! were a frame's time.
+//! were a frame's time; on llvmpipe a workgroup with nothing to do still runs.
 
 use super::bindings::{packed_offsets, FrameBinding, WaveRange, FRAMES_BOUND};
 use super::layout::{
