@@ -161,8 +161,9 @@ const GRID_OBJECT: u32 = 100u;
 const REFERENCE_FRAME: u32 = 101u;
 
 @group(0) @binding(0) var<uniform> sensor: Sensor;
-// The frames of a dispatch, by the third coordinate of its workgroups: a dispatch runs a
-// stage over every frame (or piece of one) of a wave at once, each reading its own.
+// The frames of a dispatch: a dispatch runs a stage over every frame (or piece of one) of a
+// wave at once, each workgroup finding its own (use_frame_of, use_listed_frame_of, or the
+// third coordinate for a pass over whole frames).
 @group(0) @binding(1) var<uniform> frames: array<FrameSlot, FRAMES_BOUND>;
 const FRAMES_BOUND: u32 = 256u;
 // The frame an invocation works on (use_frame).

@@ -188,8 +188,8 @@ pub(super) fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
         .collect()
 }
 
-/// Frame uniforms a bind group holds (WGSL `FRAMES_BOUND`): a dispatch's frames, by the
-/// third coordinate of its workgroups.
+/// Frame uniforms a bind group holds (WGSL `FRAMES_BOUND`): a dispatch's frames (or pieces
+/// of frames), each workgroup finding its own (`shaders/shared/common.wgsl` use_frame_of).
 pub const FRAMES_BOUND: u64 = 256;
 
 /// Bytes of the frame uniforms as bound: [`FRAMES_BOUND`] of them, [`UNIFORM_STRIDE`] apart

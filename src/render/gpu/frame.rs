@@ -136,8 +136,6 @@ impl<'c> Binds<'c> {
         slots: WaveRange,
         grid: Option<&'c Object>,
     ) -> Vec<(usize, u32)> {
-        // Only a loaded mesh's grid tells groups apart (any other binds the empty one).
-        let grid = grid.filter(|o| matches!(o, Object::Mesh { .. }));
         items
             .chunks(FRAMES_BOUND as usize)
             .map(|chunk| (self.group_of(chunk, slots, grid), chunk.len() as u32))
@@ -153,6 +151,8 @@ impl<'c> Binds<'c> {
         slots: WaveRange,
         grid: Option<&'c Object>,
     ) -> usize {
+        // Only a loaded mesh's grid tells groups apart (any other binds the empty one).
+        let grid = grid.filter(|o| matches!(o, Object::Mesh { .. }));
         let bytes: &[u8] = bytemuck::cast_slice(chunk);
         let same = |&(first, w, g): &(usize, WaveRange, Option<&Object>)| {
             let held = self.uniforms.get(first..first + chunk.len());
@@ -178,7 +178,6 @@ impl<'c> Binds<'c> {
         slots: WaveRange,
         grid: Option<&'c Object>,
     ) -> Vec<(usize, Groups)> {
-        let grid = grid.filter(|o| matches!(o, Object::Mesh { .. }));
         items
             .chunks(FRAMES_BOUND as usize)
             .map(|chunk| {
@@ -408,12 +407,10 @@ impl Renderer {
             let mut spans = Vec::new();
             for p in plans {
                 let lane = self.lane_of(p.slot);
-                let rect = span(
-                    &[p.texel_span(), self.dirty[lane]]
-                        .into_iter()
-                        .flatten()
-                        .collect::<Vec<_>>(),
-                );
+                let rect = [p.texel_span(), self.dirty[lane]]
+                    .into_iter()
+                    .flatten()
+                    .reduce(|a, b| a.union(&b));
                 self.dirty[lane] = p.texel_span();
                 if let Some(rect) = rect {
                     let lane = lane as u32;
@@ -631,8 +628,9 @@ impl Renderer {
                     (u, groups(tiles, SELECT_TILES_WORKGROUP))
                 })
                 .collect();
-            // Every listed frame is in one group: the indirect dispatches' third dimension is
-            // the wave's listed frames (at most the lanes, at most FRAMES_BOUND).
+            // Every listed frame is in one group: the passes over the lists find their frames
+            // among its first listed_frames uniforms (at most the lanes, at most
+            // FRAMES_BOUND).
             wave.listed = Some(binds.spread(&items, slots, None)[0]);
         }
         if self.sensor.config.render.noise.any() {
@@ -788,7 +786,7 @@ impl Renderer {
 }
 
 /// A round's contact dispatches: one for each kind of object (a pipeline each) and loaded
-/// mesh (an SDF grid each), sized by its largest pressed rect.
+/// mesh (an SDF grid each), over their pressed rects side by side.
 fn contact_dispatches<'c>(
     binds: &mut Binds<'c>,
     round: &[(&'c Object, FrameUniform, Rect)],

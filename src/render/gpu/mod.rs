@@ -4,10 +4,10 @@
 //! probes read a displaced texel are listed, of those the pixels whose rays the deformation
 //! reaches, and the camera casts and shades that list alone, sized on the GPU (indirect
 //! dispatch). The frames of a submission ([`Renderer::batch_frames`]) are recorded in waves
-//! of [`Renderer::lanes`] frames, each stage one dispatch over the whole wave (the frame the
-//! third coordinate of its workgroups), each frame into its own slice of the output buffers
-//! and on its own heightfield, and read back together; the next submission's frames are
-//! prepared on the CPU meanwhile.
+//! of [`Renderer::lanes`] frames, each stage one dispatch over the whole wave (sized by the
+//! sum of its frames' work, each workgroup finding its frame), each frame into its own
+//! slice of the output buffers and on its own heightfield, and read back together; the next
+//! submission's frames are prepared on the CPU meanwhile.
 //!
 //! - `resources.rs` and `pipelines.rs`: everything the renderer binds and runs, made in one
 //!   place; [`bindings`]: the one table of bindings; [`layout`]: where the shaders put

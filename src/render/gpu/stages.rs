@@ -17,7 +17,8 @@ use crate::render::touched::tile_grid;
 use crate::render::Rect;
 
 /// A stage's dispatch over frames of a wave: the bind group whose frame uniforms are
-/// theirs (by the third coordinate of the workgroups), and the workgroups.
+/// theirs (each workgroup finds its own: `use_frame_of`, or the third coordinate for the
+/// passes over whole frames), and the workgroups.
 #[derive(Clone, Copy)]
 pub(super) struct Batch<'a> {
     pub bind: &'a wgpu::BindGroup,
