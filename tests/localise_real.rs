@@ -7,11 +7,13 @@
 mod common;
 
 use geltip::localise::change::{detect, ChangeConfig, ChangeDetection};
-use geltip::localise::load_image;
+use geltip::localise::{load_image, AreaWindow, DetectorOptions, Localiser, Method};
+use geltip::sensor::Sensor;
 use glam::DVec2;
 use rayon::prelude::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 fn allsight() -> Option<PathBuf> {
     common::real("allsight")
@@ -20,10 +22,19 @@ fn allsight() -> Option<PathBuf> {
 const CENTRE: DVec2 = DVec2::new(240.0, 240.0);
 const RADIUS: f64 = 236.0;
 
+/// The finger's area each pixel of the `allsight` preset sees (the regions' area limits).
+fn areas() -> &'static [f64] {
+    static AREAS: OnceLock<Vec<f64>> = OnceLock::new();
+    AREAS.get_or_init(|| {
+        let sensor = Sensor::load("allsight").unwrap();
+        Localiser::new(&sensor).cache().areas.clone()
+    })
+}
+
 fn run(dir: &Path, reference: &str, frame: &str) -> ChangeDetection {
     let r = load_image(dir.join(reference)).unwrap();
     let f = load_image(dir.join(frame)).unwrap();
-    detect(&r, &f, CENTRE, RADIUS, &ChangeConfig::default())
+    detect(&r, &f, CENTRE, RADIUS, areas(), &ChangeConfig::default())
 }
 
 fn labels(dir: &Path) -> Vec<Value> {
@@ -158,9 +169,62 @@ fn the_threshold_is_an_option() {
             "--noise: applies to method 'change', not 'paper'",
         ),
         (&["--noise", "0"][..], "--noise: must be greater than 0"),
+        (
+            &["--method", "surface", "--area-mm2", "1,9"][..],
+            "--area-mm2: applies to method 'change' or 'paper', not 'surface'",
+        ),
+        (&["--area-mm2", "9,1"][..], "needs 0 <= MIN <= MAX"),
+        (&["--area-mm2", "9"][..], "expected MIN,MAX in mm^2"),
     ] {
         let (code, _, err) = call(extra);
         assert_ne!(code, 0);
         assert!(common::error_line(&err).contains(says), "{err}");
     }
+}
+
+/// The paper's detector on real frames: its area window, 0.012%..0.04% of the picture, is
+/// its own sensor's objects in its own sensor's pixels and passes almost no real imprint; a
+/// window on the finger (2..100 mm^2, `--area-mm2`) finds them at their azimuth. One frame
+/// in ten of the set (every push point of both sessions).
+#[test]
+fn the_paper_method_finds_real_contacts_with_an_area_on_the_finger() {
+    let Some(dir) = allsight() else { return };
+    let sensor = Sensor::load("allsight").unwrap();
+    let localiser = Localiser::new(&sensor);
+    let window = DetectorOptions {
+        area_mm2: Some(AreaWindow::new(2.0, 100.0).unwrap()),
+        ..Default::default()
+    };
+    let frames: Vec<Value> = labels(&dir).into_iter().step_by(10).collect();
+    let results: Vec<(bool, bool)> = frames
+        .par_iter()
+        .map(|f| {
+            let r = load_image(dir.join(f["reference_press"].as_str().unwrap())).unwrap();
+            let i = load_image(dir.join(f["image"].as_str().unwrap())).unwrap();
+            let paper = localiser.localise(&r, &i, Method::Paper).unwrap();
+            let on_finger = localiser
+                .localise_with(&r, &i, Method::Paper, &window)
+                .unwrap();
+            let right = on_finger.pixel.is_some_and(|p| {
+                let off = p - CENTRE;
+                if f["num"].as_u64() == Some(11) {
+                    return off.length() <= 40.0;
+                }
+                let label = f["image_azimuth_deg"].as_f64().unwrap();
+                let turn = (off.y.atan2(off.x).to_degrees() - label + 540.0).rem_euclid(360.0);
+                (turn - 180.0).abs() <= 15.0
+            });
+            (paper.detected, on_finger.detected && right)
+        })
+        .collect();
+    let n = results.len();
+    let paper = results.iter().filter(|r| r.0).count();
+    let right = results.iter().filter(|r| r.1).count();
+    eprintln!("of {n} real contacts: the paper's window found {paper}, 2..100 mm^2 put {right} at the azimuth");
+    assert_eq!(n, 40);
+    assert!(paper <= 4, "the paper's pixel window found {paper} of {n}");
+    assert!(
+        right >= 36,
+        "at the azimuth with the window on the finger: {right} of {n}"
+    );
 }

@@ -182,12 +182,14 @@ def localise(
     method: str = "change",
     threshold: Optional[float] = None,
     noise: Optional[float] = None,
+    area_mm2: Optional[Tuple[float, float]] = None,
 ) -> Dict[str, Any]:
     """Finds the contact: {"detected", "pixel", "point", "region", "confidence",
     "regions_found", "note"}, as `geltip localise` prints. method: "change" (real and
     rendered frames), "surface" (rendered frames) or "paper"; threshold: the change method's decision threshold in
     noise spreads (default 20), as `--threshold`; noise: the sensor's noise in 8-bit levels
-    (default 1; each pair's own estimate where larger), as `--noise`."""
+    (default 1; each pair's own estimate where larger), as `--noise`; area_mm2: (min, max)
+    of the contact's area on the finger, change and paper methods, as `--area-mm2`."""
 
 def load_image(path: _Path) -> _Image:
     """Reads an image file (PNG) as (H, W, 3) uint8."""
@@ -219,6 +221,7 @@ def evaluate(
     real: Optional[_Path] = None,
     threshold: Optional[float] = None,
     noise: Optional[float] = None,
+    area_mm2: Optional[Tuple[float, float]] = None,
 ) -> Dict[str, Any]:
     """The native half of `geltip.evaluate`: `detector` answers each frame with its
     detections as JSON text (or names a built-in localiser). Returns {"summary", "tables",

@@ -15,7 +15,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from os import PathLike
-from typing import Any, Callable, Dict, List, Optional, Sequence, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -92,6 +92,7 @@ def evaluate(
     real: Optional[Union[str, PathLike]] = None,
     threshold: Optional[float] = None,
     noise: Optional[float] = None,
+    area_mm2: Optional[Tuple[float, float]] = None,
 ) -> EvaluationReport:
     """Scores ``detector`` on a set from ``geltip dataset`` (``dataset=``), a suite
     rendered on the fly (``suite="paper"`` or ``"stability"``, with ``sensor=``), or a real
@@ -104,7 +105,8 @@ def evaluate(
     frame) and an optional ``"confidence"``. ``"surface"``, ``"paper"`` or ``"change"`` names a
     built-in localiser instead (``threshold``: the change method's decision threshold, in
     noise spreads; ``noise``: the sensor's noise in 8-bit levels, a floor under each pair's
-    own estimate). Detections are matched one to one to the visible
+    own estimate; ``area_mm2``: (min, max) of the contact's area on the finger, for
+    ``"change"`` and ``"paper"``). Detections are matched one to one to the visible
     contacts within ``gate_mm`` (None: any distance). With ``out``, the report's files
     (summary.json, per_sample.jsonl, tables.md, charts) are written there, beside
     ``compare``'s (another run's output directory). An exception the detector raises
@@ -132,6 +134,7 @@ def evaluate(
         real=real,
         threshold=threshold,
         noise=noise,
+        area_mm2=area_mm2,
     )
     return EvaluationReport(
         summary=r["summary"], tables=r["tables"], per_sample=r.get("per_sample", []),

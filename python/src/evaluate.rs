@@ -10,8 +10,8 @@ use geltip::evaluate::{
     detections::detections_from_json, Detector, Found, MethodDetector, Named, Sample,
 };
 use geltip::jobs::evaluate as job;
-use geltip::localise::change::ChangeOptions;
 use geltip::localise::Method;
+use geltip::localise::{AreaWindow, DetectorOptions};
 use geltip::GeltipError;
 use numpy::{PyArray, PyArrayMethods};
 use pyo3::prelude::*;
@@ -89,14 +89,15 @@ impl Detector for PyDetector {
 }
 
 /// Scores `detector` (a function `(image, reference, sensor) -> JSON text`, or "surface",
-/// "paper" or "change", whose decision `threshold` and `noise` may be given) on a dataset's directory or
+/// "paper" or "change", whose decision `threshold` and `noise` may be given, and the
+/// contact's area on the finger `area_mm2` = (min, max) for change and paper) on a dataset's directory or
 /// a suite ("paper", "stability", with `sensor`), with the matching gate `gate_mm` (None:
 /// any distance), or on a real sensor's labelled frames (`real`: a set file or the AllSight
 /// labels.json, with the `sensor` that took them). With `out`, the report's files go there,
 /// beside `compare`'s (another run's output directory). Returns {"summary", "tables",
 /// "per_sample", "files"} ({"summary", "tables", "files"} for real frames).
 #[pyfunction]
-#[pyo3(signature = (detector, *, dataset = None, suite = None, sensor = None, out = None, gate_mm = Some(3.0), name = None, compare = None, real = None, threshold = None, noise = None))]
+#[pyo3(signature = (detector, *, dataset = None, suite = None, sensor = None, out = None, gate_mm = Some(3.0), name = None, compare = None, real = None, threshold = None, noise = None, area_mm2 = None))]
 #[allow(clippy::too_many_arguments)] // The keyword arguments of geltip.evaluate, one each.
 pub fn evaluate<'py>(
     py: Python<'py>,
@@ -111,8 +112,15 @@ pub fn evaluate<'py>(
     real: Option<&Bound<'py, PyAny>>,
     threshold: Option<f64>,
     noise: Option<f64>,
+    area_mm2: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let options = ChangeOptions { threshold, noise };
+    let options = DetectorOptions {
+        threshold,
+        noise,
+        area_mm2: area_mm2
+            .map(|(lo, hi)| lib(AreaWindow::new(lo, hi)))
+            .transpose()?,
+    };
     let path = |field: &str, v: Option<&Bound<'py, PyAny>>| -> PyResult<Option<PathBuf>> {
         v.map(|v| path_or_str(field, v).map(PathBuf::from))
             .transpose()
@@ -135,12 +143,14 @@ pub fn evaluate<'py>(
         })?;
         Box::new(lib(MethodDetector::with_options(method, options))?)
     } else if options.any() {
-        let name = if threshold.is_some() {
-            "threshold"
+        let (name, methods) = if threshold.is_some() {
+            ("threshold", "the method 'change'")
+        } else if noise.is_some() {
+            ("noise", "the method 'change'")
         } else {
-            "noise"
+            ("area_mm2", "the methods 'change' and 'paper'")
         };
-        return Err(bad(name, "applies to the method 'change'"));
+        return Err(bad(name, format!("applies to {methods}")));
     } else if detector.is_callable() {
         Box::new(PyDetector {
             function: detector.clone().unbind(),

@@ -4,17 +4,18 @@
 use crate::convert::{json_to_py, path_or_str, rgb_image};
 use crate::errors::{detached, lib};
 use crate::sensor::Sensor;
-use geltip::localise::change::ChangeOptions;
-use geltip::localise::Method;
+use geltip::localise::{AreaWindow, DetectorOptions, Method};
 use numpy::{PyArray, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 
 /// Finds the contact in `image` against `reference` (both (H, W, 3) uint8 of the sensor's
 /// size): `{"detected", "pixel", "point", "region", "confidence", "regions_found", "note"}`,
 /// as `geltip localise` prints. `threshold` and `noise`: the change method's decision
-/// threshold and the sensor's noise (as `--threshold` and `--noise`).
+/// threshold and the sensor's noise (as `--threshold` and `--noise`); `area_mm2`: (min, max)
+/// of the contact's area on the finger, change and paper methods (as `--area-mm2`).
 #[pyfunction]
-#[pyo3(signature = (sensor, reference, image, method = "change", threshold = None, noise = None))]
+#[allow(clippy::too_many_arguments)] // The keyword arguments of geltip.localise, one each.
+#[pyo3(signature = (sensor, reference, image, method = "change", threshold = None, noise = None, area_mm2 = None))]
 pub fn localise<'py>(
     py: Python<'py>,
     sensor: &Bound<'py, Sensor>,
@@ -23,9 +24,16 @@ pub fn localise<'py>(
     method: &str,
     threshold: Option<f64>,
     noise: Option<f64>,
+    area_mm2: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = sensor.get();
-    let options = ChangeOptions { threshold, noise };
+    let options = DetectorOptions {
+        threshold,
+        noise,
+        area_mm2: area_mm2
+            .map(|(lo, hi)| lib(AreaWindow::new(lo, hi)))
+            .transpose()?,
+    };
     let method = lib(Method::from_name(method))?;
     let reference = rgb_image("reference", reference)?;
     let image = rgb_image("image", image)?;

@@ -165,3 +165,20 @@ def test_real_frames_and_the_change_threshold(tmp_path):
                                  threshold=threshold, noise=noise, out=tmp_path / "out")
         assert report.summary["rows"][-1]["false_contacts"] == false_contacts, report.tables
         assert "summary.json" in report.files
+
+
+def test_the_paper_method_with_an_area_on_the_finger(tmp_path):
+    """The paper's area window is in its own sensor's pixels: on a real AllSight contact
+    (../shared/real, skipped where absent) it passes no region; a window on the finger in
+    mm^2 finds the contact."""
+    with pytest.raises(ValueError, match="^area_mm2: applies to method 'change' or 'paper'"):
+        geltip.evaluate("surface", suite="paper", sensor="paper", area_mm2=(1, 9))
+    if not REAL.is_dir():
+        pytest.skip(f"{REAL} is absent (real sensor frames)")
+    line = {"image": str(REAL / "s1_image4_0.45_5.12.jpg"),
+            "reference": str(REAL / "s1_image4_0.45_0.jpg"), "contact": True, "group": "press"}
+    (tmp_path / "set.jsonl").write_text(json.dumps(line) + "\n")
+    for area, found in ((None, 0), ((2.0, 100.0), 1)):
+        report = geltip.evaluate("paper", real=tmp_path / "set.jsonl", sensor="allsight",
+                                 area_mm2=area)
+        assert report.summary["rows"][-1]["found"] == found, report.tables

@@ -82,6 +82,10 @@ def test_localise_bad_arguments(sim, sensor):
         geltip.localise(sensor, reference, reference, method="surface", noise=2.0)
     with pytest.raises(ValueError, match="^noise: must be a finite number"):
         geltip.localise(sensor, reference, reference, noise=float("nan"))
+    with pytest.raises(ValueError, match="^area_mm2: applies to method 'change' or 'paper'"):
+        geltip.localise(sensor, reference, reference, method="surface", area_mm2=(1.0, 9.0))
+    with pytest.raises(ValueError, match="^area_mm2 9,1: needs 0 <= MIN <= MAX"):
+        geltip.localise(sensor, reference, reference, area_mm2=(9.0, 1.0))
     # A non-contiguous view is accepted.
     flipped = np.ascontiguousarray(reference[::-1])[::-1]
     assert geltip.localise(sensor, reference, flipped)["detected"] is False

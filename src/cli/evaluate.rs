@@ -1,13 +1,12 @@
 //! `geltip evaluate`: score a detector (a predictions file, a program, or a built-in
 //! localiser) on a dataset or a suite, and write the report.
 
-use super::progress;
+use super::{progress, under_flags};
 use anyhow::{bail, Result};
 use clap::{ArgGroup, Args};
 use geltip::evaluate::{CommandDetector, Detector, MethodDetector, Named, Predictions};
 use geltip::jobs::evaluate::{self, SUITES};
-use geltip::localise::change::ChangeOptions;
-use geltip::localise::Method;
+use geltip::localise::{AreaWindow, DetectorOptions, Method};
 use geltip::sensor::Sensor;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -52,6 +51,11 @@ pub struct EvaluateArgs {
     /// pair's own estimate is used where larger.
     #[arg(long, requires = "method")]
     noise: Option<f64>,
+    /// The change and paper methods: the contact region's area on the finger, MIN,MAX in
+    /// mm^2 (MAX may be inf; from the sensor model, so the same on any sensor's pixels).
+    /// Defaults: change, at least 0.15 mm^2; paper, the paper's 0.012%..0.04% of the picture.
+    #[arg(long = "area-mm2", value_name = "MIN,MAX", requires = "method")]
+    area_mm2: Option<String>,
     /// Directory for summary.json, per_sample.jsonl, tables.md and the charts.
     #[arg(long)]
     out: PathBuf,
@@ -116,12 +120,18 @@ fn detector(args: &EvaluateArgs, sensor: &Sensor) -> Result<Box<dyn Detector>> {
         (_, _, Some(method)) => Box::new(
             MethodDetector::with_options(
                 Method::from_name(method).map_err(|e| anyhow::anyhow!("--{e}"))?,
-                ChangeOptions {
+                DetectorOptions {
                     threshold: args.threshold,
                     noise: args.noise,
+                    area_mm2: args
+                        .area_mm2
+                        .as_deref()
+                        .map(AreaWindow::parse)
+                        .transpose()
+                        .map_err(under_flags(&[]))?,
                 },
             )
-            .map_err(|e| anyhow::anyhow!("--{e}"))?,
+            .map_err(under_flags(&[]))?,
         ),
         _ => bail!("name a detector: --predictions, --detector or --method"),
     })

@@ -3,8 +3,7 @@
 use super::under_flags;
 use anyhow::Result;
 use clap::Args;
-use geltip::localise::change::ChangeOptions;
-use geltip::localise::{load_frame, Localiser, Method};
+use geltip::localise::{load_frame, AreaWindow, DetectorOptions, Localiser, Method};
 use geltip::sensor::Sensor;
 use std::path::PathBuf;
 
@@ -31,6 +30,11 @@ pub struct LocaliseArgs {
     /// the pair shows.
     #[arg(long)]
     noise: Option<f64>,
+    /// The change and paper methods: the contact region's area on the finger, MIN,MAX in
+    /// mm^2 (MAX may be inf; from the sensor model, so the same on any sensor's pixels).
+    /// Defaults: change, at least 0.15 mm^2; paper, the paper's 0.012%..0.04% of the picture.
+    #[arg(long = "area-mm2", value_name = "MIN,MAX")]
+    area_mm2: Option<String>,
     /// The image with the contact (PNG or JPEG).
     image: PathBuf,
 }
@@ -46,9 +50,14 @@ pub fn localise(args: LocaliseArgs) -> Result<()> {
             &reference,
             &frame,
             method,
-            &ChangeOptions {
+            &DetectorOptions {
                 threshold: args.threshold,
                 noise: args.noise,
+                area_mm2: args
+                    .area_mm2
+                    .as_deref()
+                    .map(AreaWindow::parse)
+                    .transpose()?,
             },
         )
         .map_err(under_flags(&[]))?;

@@ -5,7 +5,7 @@
 use super::detections::{parse_line, Found};
 use super::{Detector, Needs, Sample};
 use crate::error::{GeltipError, Result};
-use crate::localise::change::ChangeOptions;
+use crate::localise::DetectorOptions;
 use crate::localise::{Localiser, Method};
 use crate::sensor::Sensor;
 use rayon::prelude::*;
@@ -21,8 +21,8 @@ use std::time::{Duration, Instant};
 /// built once per sensor.
 pub struct MethodDetector {
     method: Method,
-    /// The change method's options, where not its defaults.
-    options: ChangeOptions,
+    /// The detectors' options, where not their defaults.
+    options: DetectorOptions,
     localisers: Vec<Localiser>,
 }
 
@@ -30,15 +30,16 @@ impl MethodDetector {
     pub fn new(method: Method) -> MethodDetector {
         MethodDetector {
             method,
-            options: ChangeOptions::default(),
+            options: DetectorOptions::default(),
             localisers: Vec::new(),
         }
     }
 
-    /// The method with the change method's `options` (its decision threshold, the sensor's
-    /// noise); refused for another method, or unless each is finite and > 0.
-    pub fn with_options(method: Method, options: ChangeOptions) -> Result<MethodDetector> {
-        crate::localise::change_config(method, &options)?;
+    /// The method with `options` (the change method's decision threshold and the sensor's
+    /// noise, the area limits on the finger); refused where the method does not take one, or
+    /// unless the threshold and noise are finite and > 0.
+    pub fn with_options(method: Method, options: DetectorOptions) -> Result<MethodDetector> {
+        options.check(method)?;
         Ok(MethodDetector {
             options,
             ..MethodDetector::new(method)

@@ -45,9 +45,12 @@ pub struct ChangeConfig {
     pub smooth_px: f64,
     /// The smallest spread of the smoothed map (noise-free renders).
     pub spread_floor: f64,
-    /// Candidate regions: pixels above this many spreads, at least `min_area_px` of them.
+    /// Candidate regions: pixels above this many spreads, covering `min_area_mm2` to
+    /// `max_area_mm2` of the finger (the sensor model's area per pixel: the same limit on
+    /// every sensor's pixels).
     pub region_threshold: f64,
-    pub min_area_px: usize,
+    pub min_area_mm2: f64,
+    pub max_area_mm2: f64,
     /// The contact is placed by its region's pixels at or above this fraction of its peak
     /// (the change map's smoothing spreads a contact's change well past its edge).
     pub outline_fraction: f64,
@@ -74,7 +77,8 @@ impl Default for ChangeConfig {
             smooth_px: 3.0,
             spread_floor: 0.1,
             region_threshold: 4.0,
-            min_area_px: 20,
+            min_area_mm2: MIN_AREA_MM2,
+            max_area_mm2: f64::INFINITY,
             outline_fraction: 0.1,
             agree_mm: 1.0,
             score_threshold: 20.0,
@@ -85,59 +89,18 @@ impl Default for ChangeConfig {
 impl ChangeConfig {
     /// The defaults with the decision threshold at `threshold` spreads (finite, > 0).
     pub fn with_threshold(threshold: f64) -> crate::error::Result<ChangeConfig> {
-        ChangeOptions {
+        super::DetectorOptions {
             threshold: Some(threshold),
-            noise: None,
+            ..Default::default()
         }
-        .config()
+        .change_config()
     }
 }
 
-/// What a user may set of the change method: its decision threshold and the sensor's noise.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ChangeOptions {
-    /// How many noise spreads the strongest change must stand out (default 20).
-    pub threshold: Option<f64>,
-    /// The sensor's noise, standard deviation in 8-bit levels: the noise the pair is
-    /// credited with is its own estimate or this, whichever is larger (default 1).
-    pub noise: Option<f64>,
-}
-
-impl ChangeOptions {
-    /// Whether anything is set.
-    pub fn any(&self) -> bool {
-        self.threshold.is_some() || self.noise.is_some()
-    }
-
-    /// The defaults with what is set; each value must be finite and > 0 (the error names
-    /// the option).
-    pub fn config(&self) -> crate::error::Result<ChangeConfig> {
-        let mut c = ChangeConfig::default();
-        for (name, value, slot) in [
-            ("threshold", self.threshold, &mut c.score_threshold),
-            ("noise", self.noise, &mut c.noise_floor),
-        ] {
-            if let Some(v) = value {
-                crate::checks::positive(v)
-                    .map_err(|reason| crate::error::GeltipError::option(name, reason))?;
-                *slot = v;
-            }
-        }
-        Ok(c)
-    }
-
-    /// How reports name the settings: "threshold 12, noise 3", or "" for none.
-    pub fn describe(&self) -> String {
-        let mut parts = Vec::new();
-        if let Some(t) = self.threshold {
-            parts.push(format!("threshold {t}"));
-        }
-        if let Some(n) = self.noise {
-            parts.push(format!("noise {n}"));
-        }
-        parts.join(", ")
-    }
-}
+/// Regions smaller than this on the finger are left out: specks, far too weak to be
+/// decided (about 20 px of the AllSight's cylinder; on the AllSight's real frames and the
+/// paper's rendered taps no region under it peaks past 6 spreads).
+pub const MIN_AREA_MM2: f64 = 0.15;
 
 /// What the change model found.
 #[derive(Debug, Clone, PartialEq)]
@@ -157,12 +120,14 @@ pub struct ChangeDetection {
 }
 
 /// The change between `reference` and `frame` (the same size) inside the circle of `radius`
-/// about `centre`, decided.
+/// about `centre`, decided; `areas` is the finger's area each pixel sees, mm^2, row-major
+/// (0 where it sees none: [`super::surface::SurfaceCache::areas`]).
 pub fn detect(
     reference: &RgbImage,
     frame: &RgbImage,
     centre: DVec2,
     radius: f64,
+    areas: &[f64],
     config: &ChangeConfig,
 ) -> ChangeDetection {
     let (w, h) = (reference.width() as usize, reference.height() as usize);
@@ -258,12 +223,19 @@ pub fn detect(
         .zip(&mask)
         .map(|(v, &m)| if m { (v / 3.0).sqrt() } else { 0.0 })
         .collect();
-    decide(&z, &mask, w, h, config)
+    decide(&z, &mask, areas, w, h, config)
 }
 
 /// The smoothed change map scored against its own spread over the circle, its regions
 /// found and the strongest one decided.
-fn decide(z: &[f64], mask: &[bool], w: usize, h: usize, config: &ChangeConfig) -> ChangeDetection {
+fn decide(
+    z: &[f64],
+    mask: &[bool],
+    areas: &[f64],
+    w: usize,
+    h: usize,
+    config: &ChangeConfig,
+) -> ChangeDetection {
     let smooth = gaussian(z, w, h, config.smooth_px);
     let mut inside: Vec<f64> = smooth
         .iter()
@@ -286,7 +258,13 @@ fn decide(z: &[f64], mask: &[bool], w: usize, h: usize, config: &ChangeConfig) -
     let regions = components_4(&above, w, h);
     let best = regions
         .iter()
-        .filter(|r| r.len() >= config.min_area_px)
+        .filter(|r| {
+            let area: f64 = r
+                .iter()
+                .map(|&i| areas.get(i).copied().unwrap_or(0.0))
+                .sum();
+            area >= config.min_area_mm2 && area <= config.max_area_mm2
+        })
         .map(|r| {
             let peak = r.iter().map(|&i| scored[i]).fold(f64::MIN, f64::max);
             (peak, r)

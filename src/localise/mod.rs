@@ -13,9 +13,12 @@
 //! table that [`Method::Surface`] needs, for localising many frames of one sensor.
 
 pub mod change;
+pub mod options;
 pub mod paper;
 pub mod raster;
 pub mod surface;
+
+pub use options::{AreaWindow, DetectorOptions};
 
 use crate::error::{GeltipError, Result};
 use crate::finger::Region;
@@ -288,19 +291,31 @@ impl Localiser {
         }
     }
 
-    /// [`Localiser::localise`] with the change method's `options` (its decision threshold
-    /// in noise spreads and the sensor's noise in levels, each finite and > 0); an option
-    /// for another method is an error.
+    /// [`Localiser::localise`] with `options` (the change method's decision threshold in
+    /// noise spreads and the sensor's noise in levels, each finite and > 0; the contact's
+    /// area on the finger for the change and paper methods); an option the method does not
+    /// take is an error.
     pub fn localise_with(
         &self,
         reference: &RgbImage,
         frame: &RgbImage,
         method: Method,
-        options: &change::ChangeOptions,
+        options: &DetectorOptions,
     ) -> Result<Detection> {
-        match change_config(method, options)? {
-            None => self.localise(reference, frame, method),
-            Some(config) => self.localise_change(reference, frame, &config),
+        options.check(method)?;
+        match (method, options.area_mm2) {
+            (Method::Change, _) if options.any() => {
+                self.localise_change(reference, frame, &options.change_config()?)
+            }
+            (Method::Paper, Some(window)) => {
+                check_sizes(reference, frame, Some(&self.sensor))?;
+                let limit = paper::AreaLimit::Finger {
+                    areas: &self.cache().areas,
+                    window,
+                };
+                paper::detect_with(&self.sensor, reference, frame, limit)
+            }
+            _ => self.localise(reference, frame, method),
         }
     }
 
@@ -315,7 +330,14 @@ impl Localiser {
         check_sizes(reference, frame, Some(&self.sensor))?;
         let s = &self.sensor;
         let (centre, radius) = s.image_circle();
-        let found = change::detect(reference, frame, centre, radius, config);
+        let found = change::detect(
+            reference,
+            frame,
+            centre,
+            radius,
+            &self.cache().areas,
+            config,
+        );
         // Placed on the surface as the surface method places its own contacts (a weighted
         // centroid in the image is pulled by shading and the lens's compression), or where
         // the surface method itself puts it when the two agree.
@@ -363,27 +385,4 @@ pub fn localise(
 ) -> Result<Detection> {
     check_sizes(reference, frame, Some(sensor))?;
     Localiser::new(sensor).localise(reference, frame, method)
-}
-
-/// The change method's constants for `options` given with `method` (none without any); an
-/// option for another method, or a value not finite and > 0, is an error naming the option.
-pub fn change_config(
-    method: Method,
-    options: &change::ChangeOptions,
-) -> Result<Option<change::ChangeConfig>> {
-    if !options.any() {
-        return Ok(None);
-    }
-    if method != Method::Change {
-        let name = if options.threshold.is_some() {
-            "threshold"
-        } else {
-            "noise"
-        };
-        return Err(GeltipError::option(
-            name,
-            format!("applies to method 'change', not '{method}'"),
-        ));
-    }
-    options.config().map(Some)
 }

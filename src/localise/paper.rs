@@ -6,7 +6,9 @@
 //! 3. [`brightness`] then [`threshold`]: "pixels with a brightness intensity lower than 60%
 //!    are set to zero".
 //! 4. [`regions`]: OpenCV `findContours`: 8-connected regions and their outer contours.
-//! 5. [`area_filter`]: keep regions whose area is between 0.012% and 0.04% of the picture.
+//! 5. [`area_filter`]: keep regions whose area is between 0.012% and 0.04% of the picture
+//!    (or, where [`AreaLimit::Finger`] is asked for, within a window on the finger in mm^2:
+//!    the paper's window is in its own sensor's pixels, a prior on its objects' size).
 //! 6. [`fit_ellipse`]: OpenCV `fitEllipse` on each kept contour; its centre is the region's.
 //! 7. [`weighted_centre`]: the weighted average of the centres (weights: region areas).
 //! 8. The map m ([`Sensor::unproject`]) turns that pixel into a point on the finger.
@@ -15,7 +17,7 @@
 
 pub use super::raster::mean_filter;
 use super::raster::{components, FloatImage, NEIGHBOURS_8 as DIRS};
-use super::{check_sizes, Detection};
+use super::{check_sizes, AreaWindow, Detection};
 use crate::error::Result;
 use crate::sensor::Sensor;
 use glam::DVec2;
@@ -464,7 +466,36 @@ pub fn weighted_centre(blobs: &[Blob]) -> Option<DVec2> {
     Some(sum / total)
 }
 
-/// The paper's detector from end to end. The images must have the sensor's size.
+/// How step 5 bounds a region's area.
+#[derive(Debug, Clone, Copy)]
+pub enum AreaLimit<'a> {
+    /// The paper's: the contour area within 0.012%..0.04% of the picture, px.
+    Picture,
+    /// On the finger: the region's pixels' areas summed (`areas`: mm^2 per pixel,
+    /// row-major, as [`super::surface::SurfaceCache::areas`]) within `window`.
+    Finger {
+        areas: &'a [f64],
+        window: AreaWindow,
+    },
+}
+
+impl Blob {
+    /// The finger's area the region's pixels see, mm^2 (`areas` as [`AreaLimit::Finger`]).
+    pub fn area_on_finger(&self, areas: &[f64], width: u32) -> f64 {
+        self.pixels
+            .iter()
+            .map(|&(x, y)| {
+                areas
+                    .get(y as usize * width as usize + x as usize)
+                    .copied()
+                    .unwrap_or(0.0)
+            })
+            .sum()
+    }
+}
+
+/// The paper's detector from end to end, with the paper's area filter. The images must have
+/// the sensor's size.
 ///
 /// Like the original, it always predicts a contact when anything differs: noise alone
 /// yields regions above 60% of the (noise) maximum. Only a frame identical to the
@@ -472,6 +503,16 @@ pub fn weighted_centre(blobs: &[Blob]) -> Option<DVec2> {
 /// give "not detected". Confidence: how far the brightest filtered pixel stands above the
 /// image's median, in robust noise deviations, mapped by [`super::snr_confidence`].
 pub fn detect(sensor: &Sensor, reference: &RgbImage, frame: &RgbImage) -> Result<Detection> {
+    detect_with(sensor, reference, frame, AreaLimit::Picture)
+}
+
+/// [`detect`] with step 5's bound on a region's area given by `limit`.
+pub fn detect_with(
+    sensor: &Sensor,
+    reference: &RgbImage,
+    frame: &RgbImage,
+    limit: AreaLimit,
+) -> Result<Detection> {
     check_sizes(reference, frame, Some(sensor))?;
     let diff = difference(reference, frame)?;
     let filtered = mean_filter(&diff, KERNEL);
@@ -490,9 +531,27 @@ pub fn detect(sensor: &Sensor, reference: &RgbImage, frame: &RgbImage) -> Result
     let blobs = regions(&threshold(&bright, THRESHOLD_FRACTION));
     let found = blobs.len();
     let picture = bright.pixel_count() as f64;
-    let (lo, hi) = area_range(picture);
-    let areas: Vec<f64> = blobs.iter().map(|b| b.area).collect();
-    let kept = area_filter(blobs, picture);
+    let (areas, unit, (lo, hi)): (Vec<f64>, &str, (f64, f64)) = match limit {
+        AreaLimit::Picture => (
+            blobs.iter().map(|b| b.area).collect(),
+            "px",
+            area_range(picture),
+        ),
+        AreaLimit::Finger { areas, window } => (
+            blobs
+                .iter()
+                .map(|b| b.area_on_finger(areas, bright.width))
+                .collect(),
+            "mm^2 on the finger",
+            (window.min_mm2, window.max_mm2),
+        ),
+    };
+    let kept: Vec<Blob> = blobs
+        .into_iter()
+        .zip(&areas)
+        .filter(|(_, &a)| a >= lo && a <= hi)
+        .map(|(b, _)| b)
+        .collect();
     let Some(centre) = weighted_centre(&kept) else {
         let (min, max) = areas
             .iter()
@@ -500,7 +559,7 @@ pub fn detect(sensor: &Sensor, reference: &RgbImage, frame: &RgbImage) -> Result
         return Ok(Detection::none(
             found,
             format!(
-                "no region passed the area filter ({found} regions of area {min:.1}..{max:.1} px, allowed {lo:.1}..{hi:.1} px)"
+                "no region passed the area filter ({found} regions of area {min:.1}..{max:.1} {unit}, allowed {lo:.1}..{hi:.1} {unit})"
             ),
         ));
     };
