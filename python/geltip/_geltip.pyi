@@ -209,7 +209,7 @@ def keep_freed_memory() -> bool:
     VM). Process-wide, so geltip never does it on import. True when it applied."""
 
 def evaluate(
-    detector: Union[Callable[[_Image, _Image, Sensor], str], str],
+    detector: Union[Callable[[_Image, _Image, Sensor], Optional[Sequence[Dict[str, Any]]]], str],
     *,
     dataset: Optional[_Path] = None,
     suite: Optional[str] = None,
@@ -223,8 +223,9 @@ def evaluate(
     noise: Optional[float] = None,
     area_mm2: Optional[Tuple[float, float]] = None,
 ) -> Dict[str, Any]:
-    """The native half of `geltip.evaluate`: `detector` answers each frame with its
-    detections as JSON text (or names a built-in localiser). Returns {"summary", "tables",
+    """The native half of `geltip.evaluate`: `detector` answers each frame with a list of
+    detections, dicts of "pixel" and/or "point" and "confidence" (or names a built-in
+    localiser). Returns {"summary", "tables",
     "per_sample", "files"}."""
 
 def calibrate(

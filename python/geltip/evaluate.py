@@ -11,8 +11,6 @@ protocol, files and tables as ``geltip evaluate`` (see docs/evaluate.md).
     print(report.tables)
     report.summary["recall"], report.summary["error_mm"]["median"]
 """
-import json
-import math
 from dataclasses import dataclass, field
 from os import PathLike
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
@@ -44,39 +42,6 @@ class EvaluationReport:
             f"EvaluationReport(detector={s.get('detector')!r}, samples={s.get('samples')}, "
             f"recall={recall}, false_positives={s.get('false_positives')})"
         )
-
-
-def _numbers(value: Any) -> Any:
-    """A pixel or point as a list of floats; non-finite ones as None (the library names
-    them)."""
-    flat = np.asarray(value, dtype=float).ravel().tolist()
-    return [x if math.isfinite(x) else None for x in flat]
-
-
-def _as_json(found: Optional[Sequence[Detection]]) -> str:
-    """A detector's answer as the JSON list the library reads: only converted here, every
-    value is checked by the library."""
-    if found is None:
-        return "[]"
-    if isinstance(found, dict) or not isinstance(found, (list, tuple)):
-        raise TypeError(
-            f"a detector returns a list of detections (dicts), got {type(found).__name__}"
-        )
-    out = []
-    for d in found:
-        if not isinstance(d, dict):
-            out.append(d)
-            continue
-        entry = dict(d)
-        for key in ("pixel", "point"):
-            if entry.get(key) is not None:
-                entry[key] = _numbers(entry[key])
-        c = entry.get("confidence")
-        if c is not None:
-            c = float(c)
-            entry["confidence"] = c if math.isfinite(c) else None
-        out.append(entry)
-    return json.dumps(out)
 
 
 def evaluate(
@@ -112,18 +77,8 @@ def evaluate(
     ``compare``'s (another run's output directory). An exception the detector raises
     stops the run and is raised again.
     """
-    if callable(detector):
-        user = detector
-
-        def answer(image, reference, sensor_):
-            return _as_json(user(image, reference, sensor_))
-
-        answer.__name__ = getattr(user, "__name__", "python")
-        native = answer
-    else:
-        native = detector
     r = _geltip.evaluate(
-        native,
+        detector,
         dataset=dataset,
         suite=suite,
         sensor=sensor,

@@ -1,21 +1,20 @@
 //! `geltip._geltip.evaluate`: a detector scored by the library's `geltip evaluate` job. The
 //! detector is a built-in localiser's name, or a Python function given each frame's image,
-//! reference and sensor that answers with its detections as a JSON list (the pure-Python
-//! half converts what the user's function returns); the library checks them.
+//! reference and sensor that answers with a list of detections (dicts): converted here into
+//! the library's [`Given`], which the library checks.
 
 use crate::convert::{json_to_py, path_or_str};
 use crate::errors::{bad, detached, lib};
 use crate::sensor::Sensor;
-use geltip::evaluate::{
-    detections::detections_from_json, Detector, Found, MethodDetector, Named, Sample,
-};
+use geltip::evaluate::{Detector, Found, Given, MethodDetector, Named, Sample};
 use geltip::jobs::evaluate as job;
 use geltip::localise::Method;
 use geltip::localise::{AreaWindow, DetectorOptions};
 use geltip::GeltipError;
 use numpy::{PyArray, PyArrayMethods};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
@@ -39,8 +38,8 @@ impl PyDetector {
         Ok(s)
     }
 
-    /// The function's answer for `sample`: its detections as JSON text.
-    fn call(&mut self, py: Python<'_>, sample: &Sample) -> PyResult<String> {
+    /// The function's answer for `sample`.
+    fn call<'py>(&mut self, py: Python<'py>, sample: &Sample) -> PyResult<Bound<'py, PyAny>> {
         let array = |rgb: &image::RgbImage| {
             let (w, h) = rgb.dimensions();
             PyArray::from_slice(py, rgb.as_raw()).reshape([h as usize, w as usize, 3])
@@ -48,10 +47,84 @@ impl PyDetector {
         let image = array(sample.image.rgb(&sample.sensor).map_err(to_py)?)?;
         let reference = array(sample.reference.rgb(&sample.sensor).map_err(to_py)?)?;
         let sensor = self.sensor(py, &sample.sensor)?;
-        self.function
+        Ok(self
+            .function
             .call1(py, (image, reference, sensor))?
-            .extract::<String>(py)
+            .into_bound(py))
     }
+}
+
+/// A function's answer as the library's detections: None or a list (or tuple) of dicts with
+/// "pixel" and/or "point" (sequences of numbers: lists, tuples, arrays) and "confidence".
+/// Only types are checked here (a wrong kind of answer is a `TypeError`, as Python would
+/// raise); the values are the library's to check.
+fn given(answer: &Bound<'_, PyAny>, what: &str) -> PyResult<Result<Vec<Given>, GeltipError>> {
+    if answer.is_none() {
+        return Ok(Ok(Vec::new()));
+    }
+    let items: Vec<Bound<'_, PyAny>> = if let Ok(list) = answer.cast::<PyList>() {
+        list.iter().collect()
+    } else if let Ok(tuple) = answer.cast::<PyTuple>() {
+        tuple.iter().collect()
+    } else {
+        return Err(PyTypeError::new_err(format!(
+            "a detector returns a list of detections (dicts), got {}",
+            answer
+                .get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_default()
+        )));
+    };
+    let mut out = Vec::with_capacity(items.len());
+    for (j, item) in items.iter().enumerate() {
+        let what = format!("{what}: detections[{j}]");
+        let Ok(d) = item.cast::<PyDict>() else {
+            return Ok(Err(GeltipError::input(what, "expected an object")));
+        };
+        let field = |key: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
+            Ok(d.get_item(key)?.filter(|v| !v.is_none()))
+        };
+        let numbers = |key: &str| -> PyResult<Result<Option<Vec<f64>>, GeltipError>> {
+            Ok(match field(key)? {
+                None => Ok(None),
+                Some(v) => v.extract::<Vec<f64>>().map(Some).map_err(|_| {
+                    GeltipError::input(
+                        &what,
+                        format!(
+                            "{key}: expected a sequence of numbers, got {}",
+                            crate::convert::repr(&v)
+                        ),
+                    )
+                }),
+            })
+        };
+        let confidence = match field("confidence")? {
+            None => None,
+            Some(c) => match c.extract::<f64>() {
+                Ok(c) => Some(c),
+                Err(_) => {
+                    return Ok(Err(GeltipError::input(
+                        &what,
+                        format!(
+                            "confidence: expected a number, got {}",
+                            crate::convert::repr(&c)
+                        ),
+                    )))
+                }
+            },
+        };
+        let (pixel, point) = match (numbers("pixel")?, numbers("point")?) {
+            (Ok(pixel), Ok(point)) => (pixel, point),
+            (Err(e), _) | (_, Err(e)) => return Ok(Err(e)),
+        };
+        out.push(Given {
+            pixel,
+            point,
+            confidence,
+        });
+    }
+    Ok(Ok(out))
 }
 
 fn to_py(e: GeltipError) -> PyErr {
@@ -72,12 +145,15 @@ impl Detector for PyDetector {
     fn detect(&mut self, sample: &Sample) -> geltip::Result<Vec<Found>> {
         let k = sample.truth.index;
         let what = format!("detector, sample {k}");
-        match Python::attach(|py| self.call(py, sample)) {
-            Ok(text) => {
-                let v: serde_json::Value = serde_json::from_str(&text)
-                    .map_err(|e| GeltipError::input(&what, format!("detections: {e}")))?;
-                detections_from_json(&sample.sensor, &v, &what)
-            }
+        let answered = Python::attach(|py| self.call(py, sample).and_then(|a| given(&a, &what)));
+        match answered {
+            Ok(found) => found?
+                .iter()
+                .enumerate()
+                .map(|(j, g)| {
+                    Found::from_given(&sample.sensor, g, &format!("{what}: detections[{j}]"))
+                })
+                .collect(),
             Err(e) => {
                 if let Ok(mut slot) = self.raised.lock() {
                     *slot = Some(e);
@@ -193,14 +269,10 @@ pub fn evaluate<'py>(
     let report = PyDict::new(py);
     report.set_item("summary", json_to_py(py, &outcome.summary)?)?;
     report.set_item("tables", outcome.tables)?;
-    let per_sample = geltip::evaluate::report::per_sample_jsonl(&outcome.evaluation);
-    let lines: Vec<serde_json::Value> = per_sample
-        .lines()
-        .filter_map(|l| serde_json::from_str(l).ok())
-        .collect();
+    let per_sample = geltip::evaluate::report::per_sample(&outcome.evaluation);
     report.set_item(
         "per_sample",
-        json_to_py(py, &serde_json::Value::Array(lines))?,
+        json_to_py(py, &serde_json::Value::Array(per_sample))?,
     )?;
     report.set_item("files", outcome.files)?;
     Ok(report.into_any())

@@ -116,6 +116,12 @@ def test_an_exception_in_the_detector_is_raised_again(mixed_set):
     ([{"pixel": [900.0, 3.0]}], "detector, sample 0: detections[0]: pixel: (900, 3) is outside"),
     ([{"confidence": 1.0}], "detector, sample 0: detections[0]: needs"),
     ([3], "detector, sample 0: detections[0]: expected an object"),
+    ([{"pixel": "ab"}], "detector, sample 0: detections[0]: pixel: expected a sequence of numbers"),
+    ([{"point": [1.0, 2.0]}], "detector, sample 0: detections[0]: point: expected [x, y, z] in mm"),
+    (({"pixel": (3.0, 4.0), "confidence": "high"},),
+     "detector, sample 0: detections[0]: confidence: expected a number, got 'high'"),
+    ([{"pixel": np.array([3.0, 4.0]), "confidence": float("inf")}],
+     "detector, sample 0: detections[0]: confidence: expected a finite number, got inf"),
 ])
 def test_bad_detections_name_the_sample(mixed_set, answer, says):
     with pytest.raises(geltip.InvalidArgumentError) as e:

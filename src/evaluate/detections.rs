@@ -2,7 +2,6 @@
 //! finger with a confidence, as JSON (`{"pixel": [u, v], "confidence": c}` or
 //! `{"point": [x, y, z], ...}`) or from a built-in localiser.
 
-use super::truth::pixel_of;
 use crate::error::{GeltipError, Result};
 use crate::localise::Detection;
 use crate::sensor::Sensor;
@@ -62,63 +61,90 @@ impl Found {
         let Value::Object(fields) = v else {
             return Err(GeltipError::input(what, "expected an object"));
         };
+        let numbers = |key: &str, expected: &str| -> Result<Option<Vec<f64>>> {
+            let Some(v) = fields.get(key) else {
+                return Ok(None);
+            };
+            v.as_array()
+                .and_then(|a| a.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>())
+                .map(Some)
+                .ok_or_else(|| {
+                    GeltipError::input(what, format!("{key}: expected {expected}, got {v}"))
+                })
+        };
         let confidence = match fields.get("confidence") {
-            None => 1.0,
-            Some(c) => c.as_f64().filter(|c| c.is_finite()).ok_or_else(|| {
+            None => None,
+            Some(c) => Some(c.as_f64().ok_or_else(|| {
                 GeltipError::input(
                     what,
                     format!("confidence: expected a finite number, got {c}"),
                 )
-            })?,
+            })?),
         };
-        if let Some(p) = fields.get("point") {
-            let xyz = p
-                .as_array()
-                .filter(|a| a.len() == 3)
-                .map(|a| a.iter().filter_map(Value::as_f64).collect::<Vec<_>>())
-                .filter(|a| a.len() == 3 && a.iter().all(|x| x.is_finite()))
-                .ok_or_else(|| {
-                    GeltipError::input(what, format!("point: expected [x, y, z] in mm, got {p}"))
-                })?;
-            let point = DVec3::new(xyz[0], xyz[1], xyz[2]);
-            let mut found = Found::at_point(sensor, point, confidence);
-            if let Some(px) = fields.get("pixel") {
-                found.pixel = Some(checked_pixel(sensor, px, what)?);
+        let given = Given {
+            pixel: numbers("pixel", PIXEL)?,
+            point: numbers("point", POINT)?,
+            confidence,
+        };
+        Found::from_given(sensor, &given, what)
+    }
+
+    /// A detection as a front end gives it, checked: a point of three finite numbers (mm;
+    /// its pixel, if given too, must lie on the image), else a pixel of two on the image; a
+    /// finite confidence (1 if none). `what` names it in errors.
+    pub fn from_given(sensor: &Sensor, given: &Given, what: &str) -> Result<Found> {
+        let bad = |reason: String| GeltipError::input(what, reason);
+        let confidence = match given.confidence {
+            None => 1.0,
+            Some(c) if c.is_finite() => c,
+            Some(c) => {
+                return Err(bad(format!(
+                    "confidence: expected a finite number, got {c}"
+                )))
+            }
+        };
+        let finite = |v: &[f64], n: usize| v.len() == n && v.iter().all(|x| x.is_finite());
+        let pixel = |v: &Vec<f64>| -> Result<DVec2> {
+            if !finite(v, 2) {
+                return Err(bad(format!("pixel: expected {PIXEL}, got {v:?}")));
+            }
+            let pixel = DVec2::new(v[0], v[1]);
+            if !sensor.in_image(pixel) {
+                return Err(bad(format!(
+                    "pixel: ({}, {}) is outside the {}x{} image",
+                    pixel.x, pixel.y, sensor.width, sensor.height
+                )));
+            }
+            Ok(pixel)
+        };
+        if let Some(p) = &given.point {
+            if !finite(p, 3) {
+                return Err(bad(format!("point: expected {POINT}, got {p:?}")));
+            }
+            let mut found = Found::at_point(sensor, DVec3::new(p[0], p[1], p[2]), confidence);
+            if let Some(px) = &given.pixel {
+                found.pixel = Some(pixel(px)?);
             }
             return Ok(found);
         }
-        match fields.get("pixel") {
-            Some(px) => Ok(Found::at_pixel(
-                sensor,
-                checked_pixel(sensor, px, what)?,
-                confidence,
-            )),
-            None => Err(GeltipError::input(
-                what,
-                "needs \"pixel\": [u, v] or \"point\": [x, y, z]",
-            )),
+        match &given.pixel {
+            Some(px) => Ok(Found::at_pixel(sensor, pixel(px)?, confidence)),
+            None => Err(bad("needs \"pixel\": [u, v] or \"point\": [x, y, z]".into())),
         }
     }
 }
 
-/// A pixel on the sensor's image.
-fn checked_pixel(sensor: &Sensor, v: &Value, what: &str) -> Result<DVec2> {
-    let pixel = pixel_of(v).ok_or_else(|| {
-        GeltipError::input(
-            what,
-            format!("pixel: expected [u, v] (finite numbers), got {v}"),
-        )
-    })?;
-    if !sensor.in_image(pixel) {
-        return Err(GeltipError::input(
-            what,
-            format!(
-                "pixel: ({}, {}) is outside the {}x{} image",
-                pixel.x, pixel.y, sensor.width, sensor.height
-            ),
-        ));
-    }
-    Ok(pixel)
+/// How errors say what a pixel and a point must be.
+const PIXEL: &str = "[u, v] (finite numbers)";
+const POINT: &str = "[x, y, z] in mm";
+
+/// A detection as a detector gives it, before it is checked ([`Found::from_given`]): what a
+/// front end (a JSON line, a Python dict) converts its own values into, and nothing more.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Given {
+    pub pixel: Option<Vec<f64>>,
+    pub point: Option<Vec<f64>>,
+    pub confidence: Option<f64>,
 }
 
 /// A detections list: `[{...}, ...]`.

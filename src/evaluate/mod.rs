@@ -23,7 +23,7 @@ pub mod report;
 pub mod source;
 pub mod truth;
 
-pub use detections::{parse_line, Found};
+pub use detections::{parse_line, Found, Given};
 pub use detector::{CommandDetector, MethodDetector, Named, Predictions};
 pub use matching::{score_sample, Match, SampleScore};
 pub use metrics::{ErrorStats, Group, Scored, Summary};

@@ -36,31 +36,40 @@ pub fn summary_json(summary: &Summary, run: &RunInfo) -> Value {
 }
 
 /// `per_sample.jsonl`: per frame, what matched (with its errors), what was missed and the
-/// false positives.
+/// false positives; one line of [`per_sample`] each.
 pub fn per_sample_jsonl(eval: &Evaluation) -> String {
     let mut text = String::new();
-    for f in &eval.frames {
-        let point = |j: usize| f.found[j].point.map(|p| p.to_array());
-        let line = json!({
-            "sample": f.truth.index,
-            "contacts": f.truth.contacts.len(),
-            "visible": f.truth.visible(),
-            "detections": f.found.len(),
-            "matched": f.score.matches.iter().map(|m| json!({
-                "contact": m.contact,
-                "detection": m.detection,
-                "error_mm": m.error_mm,
-                "error_px": m.error_px,
-                "confidence": f.found[m.detection].confidence,
-            })).collect::<Vec<_>>(),
-            "missed": f.score.missed,
-            "false_positives": f.score.false_positives.iter()
-                .map(|&j| json!({"detection": j, "point": point(j)})).collect::<Vec<_>>(),
-            "ignored": f.score.ignored,
-        });
+    for line in per_sample(eval) {
         let _ = writeln!(text, "{line}");
     }
     text
+}
+
+/// Per frame, what matched (with its errors), what was missed and the false positives.
+pub fn per_sample(eval: &Evaluation) -> Vec<Value> {
+    eval.frames
+        .iter()
+        .map(|f| {
+            let point = |j: usize| f.found[j].point.map(|p| p.to_array());
+            json!({
+                "sample": f.truth.index,
+                "contacts": f.truth.contacts.len(),
+                "visible": f.truth.visible(),
+                "detections": f.found.len(),
+                "matched": f.score.matches.iter().map(|m| json!({
+                    "contact": m.contact,
+                    "detection": m.detection,
+                    "error_mm": m.error_mm,
+                    "error_px": m.error_px,
+                    "confidence": f.found[m.detection].confidence,
+                })).collect::<Vec<_>>(),
+                "missed": f.score.missed,
+                "false_positives": f.score.false_positives.iter()
+                    .map(|&j| json!({"detection": j, "point": point(j)})).collect::<Vec<_>>(),
+                "ignored": f.score.ignored,
+            })
+        })
+        .collect()
 }
 
 /// A number with `digits` decimals, or "–" for null.
