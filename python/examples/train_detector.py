@@ -41,7 +41,6 @@ try:
     import torch
     import torch.nn as nn
     import torch.nn.functional as F
-    from torch.optim.swa_utils import AveragedModel, get_ema_multi_avg_fn
     from PIL import Image
 except ImportError as e:  # pragma: no cover - depends on the environment
     sys.exit(f"error: this example needs PyTorch and Pillow ({e}); pip install torch pillow")
@@ -285,9 +284,6 @@ def train(args, data, device):
     steps = args.epochs * math.ceil(n / args.batch)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, args.lr, total_steps=steps, pct_start=0.15)
     refs_dev = refs.to(device)
-    # The weights' running average (batch-norm statistics too) is what is kept: steadier on
-    # frames unlike the training set's than the last step's weights.
-    ema = AveragedModel(net, multi_avg_fn=get_ema_multi_avg_fn(args.ema), use_buffers=True)
     log, step, t0 = [], 0, time.time()
     for epoch in range(args.epochs):
         order = torch.randperm(n, generator=cpu_gen)
@@ -314,7 +310,6 @@ def train(args, data, device):
             loss.backward()
             opt.step()
             sched.step()
-            ema.update_parameters(net)
             step += 1
             totals += [loss_p.item(), loss_h.item(), loss_px.item() * 50]
         batches = math.ceil(n / args.batch)
@@ -329,7 +324,7 @@ def train(args, data, device):
         print(f"epoch {epoch + 1}/{args.epochs}: presence {row['presence_bce']:.3f}, "
               f"heatmap {row['heatmap_ce']:.3f}, pixel {row['pixel_l1_px']:.1f} px, "
               f"{row['seconds']:.0f} s", flush=True)
-    return ema.module, log
+    return net, log
 
 
 def detector(net, device, threshold):
@@ -369,8 +364,6 @@ def main():
     ap.add_argument("--epochs", type=int, default=6)
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--lr", type=float, default=3e-3)
-    ap.add_argument("--ema", type=float, default=0.99,
-                    help="decay of the weights' running average kept as the model (0: the last step's)")
     ap.add_argument("--threshold", type=float, default=0.5,
                     help="presence above which a frame is called a contact")
     ap.add_argument("--seed", type=int, default=1)
