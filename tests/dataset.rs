@@ -335,6 +335,34 @@ fn torn_line_and_missing_file_are_redone() {
     assert!(files(&out) == before);
 }
 
+/// The labels' one rule (`jobs::dataset::labels`): only an unfinished last line is dropped
+/// on resume; a bad line elsewhere stops the run with a one-line error naming it, and the
+/// set is left as it was.
+#[test]
+fn a_bad_label_line_before_the_last_is_refused_on_resume() {
+    let root = scratch("bad-line");
+    let out = root.join("set");
+    let args = ["--count", "4", "--seed", "2"];
+    dataset(&out, &args);
+    let text = fs::read_to_string(out.join("labels.jsonl")).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.insert(1, "{\"index\": 7, \"ima");
+    let bad = lines.join("\n") + "\n";
+    fs::write(out.join("labels.jsonl"), &bad).unwrap();
+    let before = files(&out);
+    let mut call = vec![
+        "dataset",
+        "--sensor",
+        "paper",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    call.extend_from_slice(&args);
+    let e = error_of(&call);
+    assert!(e.contains("labels.jsonl: line 2: not valid JSON"), "{e}");
+    assert!(files(&out) == before, "the set changed");
+}
+
 /// A shard's manifest naming no shard of its set (an index past the count, a count of 0)
 /// is refused by a merge with a one-line error, whichever shard it is given as.
 #[test]

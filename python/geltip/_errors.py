@@ -16,3 +16,7 @@ class GpuError(GeltipError, RuntimeError):
 
 class GeltipIOError(GeltipError, OSError):
     """A file could not be read or written."""
+
+
+class GeltipFileNotFoundError(GeltipIOError, FileNotFoundError):
+    """A file that is not there (``except FileNotFoundError`` catches it too)."""

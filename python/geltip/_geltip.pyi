@@ -208,6 +208,10 @@ def keep_freed_memory() -> bool:
     image buffers are then not page-faulted in again (1.0-1.4 ms a 640x480 frame on a 2-core
     VM). Process-wide, so geltip never does it on import. True when it applied."""
 
+def dataset_labels(root: _Path) -> List[Dict[str, Any]]:
+    """The label lines of the `geltip dataset` set in `root`, as dicts in file order, by the
+    library's reader (only an unfinished last line is left out)."""
+
 def evaluate(
     detector: Union[Callable[[_Image, _Image, Sensor], Optional[Sequence[Dict[str, Any]]]], str],
     *,

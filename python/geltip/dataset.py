@@ -47,25 +47,15 @@ class Dataset(_Base):  # type: ignore[misc,valid-type]
         transform: Optional[Callable[[Sample], Any]] = None,
     ) -> None:
         self.root = Path(root)
-        labels_path = self.root / "labels.jsonl"
-        if not labels_path.is_file():
-            raise FileNotFoundError(
-                f"{labels_path}: no labels.jsonl (is {self.root} a `geltip dataset` directory?)"
-            )
         manifest = self.root / "dataset.json"
         self.manifest: Dict[str, Any] = (
             json.loads(manifest.read_text()) if manifest.is_file() else {}
         )
-        labels: List[Dict[str, Any]] = []
-        with open(labels_path) as f:
-            for n, line in enumerate(f, 1):
-                if not line.strip():
-                    continue
-                try:
-                    labels.append(json.loads(line))
-                except json.JSONDecodeError:
-                    # A run killed mid-line leaves a torn last line: `geltip dataset` redoes it.
-                    continue
+        # The library's reader: only an unfinished last line (a run killed while writing
+        # it) is left out; any other bad line is an error naming it.
+        from ._geltip import dataset_labels
+
+        labels: List[Dict[str, Any]] = dataset_labels(self.root)
         labels.sort(key=lambda label: label["index"])
         self.labels = labels
         self.transform = transform

@@ -27,6 +27,9 @@ impl From<GeltipError> for Failure {
             GeltipError::NoAdapter(_) | GeltipError::Gpu(_) | GeltipError::Shader { .. } => {
                 "GpuError"
             }
+            GeltipError::Io { ref cause, .. } if cause.kind() == std::io::ErrorKind::NotFound => {
+                "GeltipFileNotFoundError"
+            }
             GeltipError::Io { .. } => "GeltipIOError",
         };
         Failure {
@@ -49,6 +52,9 @@ impl From<Failure> for PyErr {
                 Err(_) => match f.class {
                     "GpuError" => pyo3::exceptions::PyRuntimeError::new_err(f.message),
                     "GeltipIOError" => pyo3::exceptions::PyOSError::new_err(f.message),
+                    "GeltipFileNotFoundError" => {
+                        pyo3::exceptions::PyFileNotFoundError::new_err(f.message)
+                    }
                     _ => pyo3::exceptions::PyValueError::new_err(f.message),
                 },
             }

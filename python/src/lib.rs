@@ -12,6 +12,7 @@
 //! - `sensor`: `Sensor`. `simulator`: `Simulator`; `batch`: its `render_batch`; `scenes`:
 //!   its `render_scenes`; `mesh`: its `add_mesh`'s arrays.
 //! - `localise`: `localise`, `load_image`, `save_image`. `host`: `keep_freed_memory`, `host_speed`.
+//! - `dataset`: `dataset_labels`, a set's labels by the library's reader.
 //! - `evaluate`: `evaluate`, a detector (a function or a built-in) scored on a set or suite.
 //! - `calibrate`: `calibrate`, a sensor fitted to a real sensor's empty frames.
 
@@ -19,6 +20,7 @@ mod batch;
 mod calibrate;
 mod contact;
 mod convert;
+mod dataset;
 mod errors;
 mod evaluate;
 mod host;
@@ -38,6 +40,7 @@ fn _geltip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulator::Simulator>()?;
     m.add_function(wrap_pyfunction!(localise::localise, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset::dataset_labels, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(localise::load_image, m)?)?;
     m.add_function(wrap_pyfunction!(localise::save_image, m)?)?;

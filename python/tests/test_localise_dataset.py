@@ -149,6 +149,28 @@ def test_dataset_without_labels(tmp_path):
         geltip.Dataset(tmp_path)
 
 
+def test_dataset_reads_labels_by_the_librarys_rule(dataset_dir, tmp_path):
+    """As every reader of labels.jsonl: an unfinished last line (a run killed while writing
+    it) is left out; a bad line elsewhere, or a sample named twice, is an error naming it."""
+    import shutil
+
+    text = (dataset_dir / "labels.jsonl").read_text()
+    lines = text.splitlines()
+    for name, body, says in (
+        ("torn", text + '{"index": 5, "ima', None),
+        ("bad", lines[0] + "\n{oops\n" + "\n".join(lines[1:]) + "\n", "line 2: not valid JSON"),
+        ("twice", text + lines[0] + "\n", "line 6: index: sample 0 again"),
+    ):
+        root = tmp_path / name
+        shutil.copytree(dataset_dir, root)
+        (root / "labels.jsonl").write_text(body)
+        if says is None:
+            assert len(geltip.Dataset(root)) == 5
+        else:
+            with pytest.raises(geltip.InvalidArgumentError, match=says):
+                geltip.Dataset(root)
+
+
 def test_dataset_is_a_torch_dataset_when_torch_imports(dataset_dir):
     from geltip import dataset
 

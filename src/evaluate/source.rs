@@ -130,23 +130,11 @@ impl DatasetSource {
             (Some(a), Some(b)) if b >= a => Some(a..b),
             _ => options["count"].as_u64().map(|n| 0..n),
         };
-        let path = dir.join(LABELS);
-        let text = std::fs::read_to_string(&path).map_err(|e| GeltipError::io(&path, e))?;
         let mut entries = Vec::new();
         let mut references = BTreeMap::new();
-        // Each sample's line, so that a sample named twice is refused, not scored twice.
-        let mut lines: BTreeMap<u64, usize> = BTreeMap::new();
-        for (n, line) in text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty())
-        {
-            let at = format!("{}: line {}", what(LABELS), n + 1);
-            let v: Value = serde_json::from_str(line)
-                .map_err(|e| GeltipError::input(&at, format!("not valid JSON: {e}")))?;
-            let index = v["index"]
-                .as_u64()
-                .ok_or_else(|| GeltipError::input(&at, "index: required, an integer >= 0"))?;
+        for line in dataset::read_labels(&dir.join(LABELS))? {
+            let (index, v) = (line.index, &line.value);
+            let at = format!("{}: line {}", what(LABELS), line.line);
             if let Some(r) = samples.as_ref().filter(|r| !r.contains(&index)) {
                 return Err(GeltipError::input(
                     &at,
@@ -156,16 +144,10 @@ impl DatasetSource {
                     ),
                 ));
             }
-            if let Some(first) = lines.insert(index, n + 1) {
-                return Err(GeltipError::input(
-                    &at,
-                    format!("index: sample {index} again (first on line {first})"),
-                ));
-            }
             let image = v["image"]
                 .as_str()
                 .ok_or_else(|| GeltipError::input(&at, "image: required, a file name"))?;
-            let truth = SampleTruth::from_json(&sensor, index, &v, target, &at)?;
+            let truth = SampleTruth::from_json(&sensor, index, v, target, &at)?;
             entries.push((truth, dir.join(image)));
             if let Some(r) = v.get("reference").filter(|r| !r.is_null()) {
                 let r = r

@@ -28,6 +28,7 @@
 //! manifest, labels, resume, lock, merge).
 
 mod encode;
+pub mod labels;
 pub mod look;
 mod pipeline;
 mod reference;
@@ -36,6 +37,7 @@ pub mod spec;
 pub mod store;
 
 pub use crate::render::background::fnv1a64;
+pub use labels::{read_labels, LabelLine};
 pub use reference::{reference_of_set, REFERENCE};
 pub use sampling::{
     load_objects, make_contact, sample_contact, sample_contacts, visible_arc_length, SampleRng,

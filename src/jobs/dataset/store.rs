@@ -2,6 +2,7 @@
 //! (the samples whose line and files exist), temporary files a killed run left, the lock that
 //! keeps a second run out, and merging shard directories into one set.
 
+use super::labels::read_labels;
 use super::reference::REFERENCE;
 use super::spec::{Shard, Spec};
 use crate::error::{GeltipError, Result};
@@ -25,8 +26,8 @@ pub(super) struct SetDir<'a> {
 
 impl<'a> SetDir<'a> {
     /// Opens `dir` for `spec`'s run: creates and locks it, writes the manifest or checks the
-    /// one there against `options`, removes stale temporary files and drops torn and
-    /// dangling label lines. Returns the complete samples of the shard, by index.
+    /// one there against `options`, removes stale temporary files and drops an unfinished
+    /// last label line and lines whose files are gone. Returns the complete samples of the shard, by index.
     pub(super) fn open(
         dir: &'a Path,
         spec: &Spec,
@@ -58,7 +59,7 @@ impl<'a> SetDir<'a> {
         let mut done = complete_samples(dir)?;
         let range = spec.shard.range(spec.count);
         done.retain(|k, _| range.contains(k));
-        // Drop torn and dangling lines before appending.
+        // Drop an unfinished last line and dangling lines before appending.
         write_labels(dir, &done)?;
         Ok((SetDir { dir, _lock: lock }, done))
     }
@@ -142,31 +143,23 @@ fn remove_temp_files(dir: &Path) {
     }
 }
 
-/// The complete samples listed in a set directory's `labels.jsonl`: the parsed lines (by
-/// index) whose files exist. Torn or unreadable lines are dropped.
+/// The complete samples listed in a set directory's `labels.jsonl` (read by
+/// [`read_labels`]'s rule): the lines (by index) whose files exist.
 fn complete_samples(dir: &Path) -> Result<BTreeMap<u64, String>> {
     let path = dir.join(LABELS);
-    let text = match fs::read(&path) {
-        Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BTreeMap::new()),
-        Err(e) => return Err(GeltipError::io(path, e)),
-    };
+    if !path.exists() {
+        return Ok(BTreeMap::new());
+    }
     let mut done = BTreeMap::new();
-    for line in text.lines() {
-        let Ok(v) = serde_json::from_str::<Value>(line) else {
-            continue;
-        };
-        let Some(k) = v.get("index").and_then(Value::as_u64) else {
-            continue;
-        };
+    for line in read_labels(&path)? {
         let files_exist = ["image", "depth", "mask"]
             .iter()
-            .all(|key| match v.get(*key) {
+            .all(|key| match line.value.get(*key) {
                 Some(Value::String(rel)) => dir.join(rel).is_file(),
                 _ => *key != "image",
             });
         if files_exist {
-            done.entry(k).or_insert_with(|| line.to_string());
+            done.insert(line.index, line.text);
         }
     }
     Ok(done)
