@@ -1,7 +1,7 @@
 //! An evaluation's charts: recall and error by group (depth, region), the failure map on the
 //! unrolled finger and the precision-recall curves. Each compared detector is a series.
 
-use super::report::group_names;
+use super::metrics::group_names;
 use super::Evaluation;
 use crate::error::Result;
 use crate::plot;

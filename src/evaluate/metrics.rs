@@ -291,6 +291,25 @@ fn thin(curve: Vec<PrPoint>) -> Vec<PrPoint> {
         .collect()
 }
 
+/// The groups of `key` in any summary: those in `order` first, then the others by name.
+pub(super) fn group_names(summaries: &[Value], key: &str, order: &[String]) -> Vec<String> {
+    let mut all: Vec<String> = Vec::new();
+    for s in summaries {
+        if let Some(m) = s[key].as_object() {
+            for k in m.keys() {
+                if !all.contains(k) {
+                    all.push(k.clone());
+                }
+            }
+        }
+    }
+    let mut names: Vec<String> = order.iter().filter(|n| all.contains(n)).cloned().collect();
+    let mut rest: Vec<String> = all.into_iter().filter(|n| !order.contains(n)).collect();
+    rest.sort();
+    names.extend(rest);
+    names
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

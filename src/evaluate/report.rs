@@ -2,7 +2,7 @@
 //! a second detector's results beside them when compared.
 
 use super::charts;
-use super::metrics::depth_bins;
+use super::metrics::{depth_bins, group_names};
 use super::truth::REGIONS;
 use super::{Evaluation, Summary};
 use crate::error::{GeltipError, Result};
@@ -173,25 +173,6 @@ pub fn tables_markdown(summaries: &[Value]) -> String {
         }
     }
     md
-}
-
-/// The groups of `key` in any summary: those in `order` first, then the others by name.
-pub(super) fn group_names(summaries: &[Value], key: &str, order: &[String]) -> Vec<String> {
-    let mut all: Vec<String> = Vec::new();
-    for s in summaries {
-        if let Some(m) = s[key].as_object() {
-            for k in m.keys() {
-                if !all.contains(k) {
-                    all.push(k.clone());
-                }
-            }
-        }
-    }
-    let mut names: Vec<String> = order.iter().filter(|n| all.contains(n)).cloned().collect();
-    let mut rest: Vec<String> = all.into_iter().filter(|n| !order.contains(n)).collect();
-    rest.sort();
-    names.extend(rest);
-    names
 }
 
 /// Reads a compared run's `summary.json` from its output directory.
