@@ -228,6 +228,42 @@ mod tests {
         assert_eq!(corner[0].point, None);
     }
 
+    /// What a front end hands over unchecked (a Python dict: NaN and infinities included)
+    /// is checked by the library, naming the field.
+    #[test]
+    fn given_values_are_checked_by_the_library() {
+        let s = paper();
+        let given = |pixel: Option<Vec<f64>>, point: Option<Vec<f64>>, confidence| Given {
+            pixel,
+            point,
+            confidence,
+        };
+        let ok = Found::from_given(&s, &given(Some(vec![400.0, 240.0]), None, None), "d").unwrap();
+        assert_eq!(
+            (ok.pixel, ok.confidence),
+            (Some(DVec2::new(400.0, 240.0)), 1.0)
+        );
+        for (g, says) in [
+            (
+                given(Some(vec![f64::NAN, 3.0]), None, None),
+                "d: pixel: expected",
+            ),
+            (given(Some(vec![1.0]), None, None), "d: pixel: expected"),
+            (
+                given(None, Some(vec![1.0, f64::INFINITY, 2.0]), None),
+                "d: point: expected",
+            ),
+            (
+                given(Some(vec![1.0, 2.0]), None, Some(f64::NAN)),
+                "d: confidence: expected a finite",
+            ),
+            (given(None, None, Some(0.5)), "d: needs"),
+        ] {
+            let e = Found::from_given(&s, &g, "d").unwrap_err().to_string();
+            assert!(e.starts_with(says), "{g:?}: {e}");
+        }
+    }
+
     #[test]
     fn bad_lines_name_the_line_and_the_field() {
         let s = paper();
