@@ -350,14 +350,8 @@ fn a_bad_label_line_before_the_last_is_refused_on_resume() {
     let bad = lines.join("\n") + "\n";
     fs::write(out.join("labels.jsonl"), &bad).unwrap();
     let before = files(&out);
-    let mut call = vec![
-        "dataset",
-        "--sensor",
-        "paper",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    call.extend_from_slice(&args);
+    let dir = out.to_str().unwrap();
+    let call = [&["dataset", "--sensor", "paper", "--out", dir][..], &args].concat();
     let e = error_of(&call);
     assert!(e.contains("labels.jsonl: line 2: not valid JSON"), "{e}");
     assert!(files(&out) == before, "the set changed");

@@ -235,3 +235,19 @@ pub fn output_array<'py, T: numpy::Element, D: numpy::ndarray::Dimension>(
     }
     Ok(a.clone())
 }
+
+/// The detectors' keyword arguments (`threshold`, `noise`, `area_mm2=(min, max)`) as the
+/// library's options; the library checks them.
+pub fn detector_options(
+    threshold: Option<f64>,
+    noise: Option<f64>,
+    area_mm2: Option<(f64, f64)>,
+) -> PyResult<geltip::localise::DetectorOptions> {
+    Ok(geltip::localise::DetectorOptions {
+        threshold,
+        noise,
+        area_mm2: area_mm2
+            .map(|(lo, hi)| crate::errors::lib(geltip::localise::AreaWindow::new(lo, hi)))
+            .transpose()?,
+    })
+}

@@ -3,13 +3,12 @@
 //! reference and sensor that answers with a list of detections (dicts): converted here into
 //! the library's [`Given`], which the library checks.
 
-use crate::convert::{json_to_py, path_or_str};
+use crate::convert::{detector_options, json_to_py, path_or_str};
 use crate::errors::{bad, detached, lib};
 use crate::sensor::Sensor;
 use geltip::evaluate::{Detector, Found, Given, MethodDetector, Named, Sample};
 use geltip::jobs::evaluate as job;
 use geltip::localise::Method;
-use geltip::localise::{AreaWindow, DetectorOptions};
 use geltip::GeltipError;
 use numpy::{PyArray, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
@@ -190,13 +189,7 @@ pub fn evaluate<'py>(
     noise: Option<f64>,
     area_mm2: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let options = DetectorOptions {
-        threshold,
-        noise,
-        area_mm2: area_mm2
-            .map(|(lo, hi)| lib(AreaWindow::new(lo, hi)))
-            .transpose()?,
-    };
+    let options = detector_options(threshold, noise, area_mm2)?;
     let path = |field: &str, v: Option<&Bound<'py, PyAny>>| -> PyResult<Option<PathBuf>> {
         v.map(|v| path_or_str(field, v).map(PathBuf::from))
             .transpose()

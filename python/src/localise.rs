@@ -1,10 +1,10 @@
 //! `geltip.localise`, `geltip.load_image` and `geltip.save_image`: finding a contact in a
 //! frame, reading and writing frames.
 
-use crate::convert::{json_to_py, path_or_str, rgb_image};
+use crate::convert::{detector_options, json_to_py, path_or_str, rgb_image};
 use crate::errors::{detached, lib};
 use crate::sensor::Sensor;
-use geltip::localise::{AreaWindow, DetectorOptions, Method};
+use geltip::localise::Method;
 use numpy::{PyArray, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 
@@ -27,13 +27,7 @@ pub fn localise<'py>(
     area_mm2: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let s = sensor.get();
-    let options = DetectorOptions {
-        threshold,
-        noise,
-        area_mm2: area_mm2
-            .map(|(lo, hi)| lib(AreaWindow::new(lo, hi)))
-            .transpose()?,
-    };
+    let options = detector_options(threshold, noise, area_mm2)?;
     let method = lib(Method::from_name(method))?;
     let reference = rgb_image("reference", reference)?;
     let image = rgb_image("image", image)?;

@@ -18,6 +18,7 @@
 //! highest drift-only score.
 
 use super::raster::median;
+use super::AreaWindow;
 use crate::calibrate::solve::solve_dense;
 use glam::DVec2;
 use image::RgbImage;
@@ -45,12 +46,11 @@ pub struct ChangeConfig {
     pub smooth_px: f64,
     /// The smallest spread of the smoothed map (noise-free renders).
     pub spread_floor: f64,
-    /// Candidate regions: pixels above this many spreads, covering `min_area_mm2` to
-    /// `max_area_mm2` of the finger (the sensor model's area per pixel: the same limit on
-    /// every sensor's pixels).
+    /// Candidate regions: pixels above this many spreads, covering an area of the finger
+    /// within `area_mm2` (the sensor model's area per pixel: the same limit on every
+    /// sensor's pixels).
     pub region_threshold: f64,
-    pub min_area_mm2: f64,
-    pub max_area_mm2: f64,
+    pub area_mm2: AreaWindow,
     /// The contact is placed by its region's pixels at or above this fraction of its peak
     /// (the change map's smoothing spreads a contact's change well past its edge).
     pub outline_fraction: f64,
@@ -77,8 +77,10 @@ impl Default for ChangeConfig {
             smooth_px: 3.0,
             spread_floor: 0.1,
             region_threshold: 4.0,
-            min_area_mm2: MIN_AREA_MM2,
-            max_area_mm2: f64::INFINITY,
+            area_mm2: AreaWindow {
+                min_mm2: MIN_AREA_MM2,
+                max_mm2: f64::INFINITY,
+            },
             outline_fraction: 0.1,
             agree_mm: 1.0,
             score_threshold: 20.0,
@@ -263,7 +265,7 @@ fn decide(
                 .iter()
                 .map(|&i| areas.get(i).copied().unwrap_or(0.0))
                 .sum();
-            area >= config.min_area_mm2 && area <= config.max_area_mm2
+            config.area_mm2.holds(area)
         })
         .map(|r| {
             let peak = r.iter().map(|&i| scored[i]).fold(f64::MIN, f64::max);

@@ -59,7 +59,7 @@ pub struct DetectorOptions {
     /// the pair is credited with is its own estimate or this, whichever is larger (default 1).
     pub noise: Option<f64>,
     /// The change and paper methods: the contact region's area on the finger. Defaults:
-    /// change, at least [`ChangeConfig::default`]'s `min_area_mm2`; paper, the paper's
+    /// change, at least [`ChangeConfig::default`]'s `area_mm2.min_mm2`; paper, the paper's
     /// 0.012%..0.04% of the picture (in pixels: one sensor's objects).
     pub area_mm2: Option<AreaWindow>,
 }
@@ -116,8 +116,7 @@ impl DetectorOptions {
             c.noise_floor = n;
         }
         if let Some(a) = self.area_mm2 {
-            c.min_area_mm2 = a.min_mm2;
-            c.max_area_mm2 = a.max_mm2;
+            c.area_mm2 = a;
         }
         Ok(c)
     }
@@ -187,6 +186,6 @@ mod tests {
             .to_string()
             .contains("noise"));
         let c = o.change_config().unwrap();
-        assert_eq!((c.min_area_mm2, c.max_area_mm2), (1.0, 9.0));
+        assert_eq!((c.area_mm2.min_mm2, c.area_mm2.max_mm2), (1.0, 9.0));
     }
 }

@@ -217,11 +217,77 @@ pub fn area_range(picture_area: f64) -> (f64, f64) {
 /// Step 5: keeps the regions whose contour area ([`Blob::area`], OpenCV's `contourArea`)
 /// lies between 0.012% and 0.04% of `picture_area` (both ends included).
 pub fn area_filter(blobs: Vec<Blob>, picture_area: f64) -> Vec<Blob> {
-    let (lo, hi) = area_range(picture_area);
-    blobs
-        .into_iter()
-        .filter(|b| b.area >= lo && b.area <= hi)
-        .collect()
+    split_by_area(blobs, &AreaLimit::Picture, picture_area, 0).0
+}
+
+/// How step 5 bounds a region's area.
+#[derive(Debug, Clone, Copy)]
+pub enum AreaLimit<'a> {
+    /// The paper's: the contour area within 0.012%..0.04% of the picture, px.
+    Picture,
+    /// On the finger: the region's pixels' areas summed (`areas`: mm^2 per pixel,
+    /// row-major, as [`super::surface::SurfaceCache::areas`]) within `window`.
+    Finger {
+        areas: &'a [f64],
+        window: AreaWindow,
+    },
+}
+
+impl Blob {
+    /// The finger's area the region's pixels see, mm^2 (`areas` as [`AreaLimit::Finger`]).
+    pub fn area_on_finger(&self, areas: &[f64], width: u32) -> f64 {
+        self.pixels
+            .iter()
+            .map(|&(x, y)| {
+                areas
+                    .get(y as usize * width as usize + x as usize)
+                    .copied()
+                    .unwrap_or(0.0)
+            })
+            .sum()
+    }
+}
+
+impl AreaLimit<'_> {
+    /// A region's area under this limit: px for `Picture`, mm^2 for `Finger` (`width`: the
+    /// picture's).
+    pub fn measure(&self, blob: &Blob, width: u32) -> f64 {
+        match self {
+            AreaLimit::Picture => blob.area,
+            AreaLimit::Finger { areas, .. } => blob.area_on_finger(areas, width),
+        }
+    }
+
+    /// The smallest and largest area a region may have, in [`Self::measure`]'s unit, for a
+    /// picture of `picture_area` px.
+    pub fn window(&self, picture_area: f64) -> (f64, f64) {
+        match self {
+            AreaLimit::Picture => area_range(picture_area),
+            AreaLimit::Finger { window, .. } => (window.min_mm2, window.max_mm2),
+        }
+    }
+
+    fn unit(&self) -> &'static str {
+        match self {
+            AreaLimit::Picture => "px",
+            AreaLimit::Finger { .. } => "mm^2 on the finger",
+        }
+    }
+}
+
+/// Step 5 under `limit`: the regions whose area lies in its window (both ends included),
+/// and the others (`width`: the picture's).
+pub fn split_by_area(
+    blobs: Vec<Blob>,
+    limit: &AreaLimit,
+    picture_area: f64,
+    width: u32,
+) -> (Vec<Blob>, Vec<Blob>) {
+    let (lo, hi) = limit.window(picture_area);
+    blobs.into_iter().partition(|b| {
+        let area = limit.measure(b, width);
+        area >= lo && area <= hi
+    })
 }
 
 /// An ellipse in pixel coordinates.
@@ -466,34 +532,6 @@ pub fn weighted_centre(blobs: &[Blob]) -> Option<DVec2> {
     Some(sum / total)
 }
 
-/// How step 5 bounds a region's area.
-#[derive(Debug, Clone, Copy)]
-pub enum AreaLimit<'a> {
-    /// The paper's: the contour area within 0.012%..0.04% of the picture, px.
-    Picture,
-    /// On the finger: the region's pixels' areas summed (`areas`: mm^2 per pixel,
-    /// row-major, as [`super::surface::SurfaceCache::areas`]) within `window`.
-    Finger {
-        areas: &'a [f64],
-        window: AreaWindow,
-    },
-}
-
-impl Blob {
-    /// The finger's area the region's pixels see, mm^2 (`areas` as [`AreaLimit::Finger`]).
-    pub fn area_on_finger(&self, areas: &[f64], width: u32) -> f64 {
-        self.pixels
-            .iter()
-            .map(|&(x, y)| {
-                areas
-                    .get(y as usize * width as usize + x as usize)
-                    .copied()
-                    .unwrap_or(0.0)
-            })
-            .sum()
-    }
-}
-
 /// The paper's detector from end to end, with the paper's area filter. The images must have
 /// the sensor's size.
 ///
@@ -531,31 +569,13 @@ pub fn detect_with(
     let blobs = regions(&threshold(&bright, THRESHOLD_FRACTION));
     let found = blobs.len();
     let picture = bright.pixel_count() as f64;
-    let (areas, unit, (lo, hi)): (Vec<f64>, &str, (f64, f64)) = match limit {
-        AreaLimit::Picture => (
-            blobs.iter().map(|b| b.area).collect(),
-            "px",
-            area_range(picture),
-        ),
-        AreaLimit::Finger { areas, window } => (
-            blobs
-                .iter()
-                .map(|b| b.area_on_finger(areas, bright.width))
-                .collect(),
-            "mm^2 on the finger",
-            (window.min_mm2, window.max_mm2),
-        ),
-    };
-    let kept: Vec<Blob> = blobs
-        .into_iter()
-        .zip(&areas)
-        .filter(|(_, &a)| a >= lo && a <= hi)
-        .map(|(b, _)| b)
-        .collect();
+    let (kept, rejected) = split_by_area(blobs, &limit, picture, bright.width);
     let Some(centre) = weighted_centre(&kept) else {
-        let (min, max) = areas
+        let (min, max) = rejected
             .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+            .map(|b| limit.measure(b, bright.width))
+            .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+        let ((lo, hi), unit) = (limit.window(picture), limit.unit());
         return Ok(Detection::none(
             found,
             format!(
