@@ -57,6 +57,18 @@ fn allsight_first_frames_reach_28_db_with_the_geometry_held() -> Result<()> {
         );
         assert!(after >= 28.0, "{session}: {after:.2} dB");
         assert_eq!(c.leds, 9);
+        // The shell's open end is what lights the tip: the preset as shipped, with and
+        // without its [shell_end], against the frame.
+        let with = psnr(&c, start.config.clone());
+        let mut plain = start.config.clone();
+        plain.shell_end = None;
+        let without = psnr(&c, plain);
+        eprintln!("{session}: the preset {with:.2} dB, without its shell end {without:.2} dB");
+        assert!(
+            with >= without + 1.0,
+            "{session}: the shell end buys {:.2} dB",
+            with - without
+        );
         if session == "s1" {
             let mut old = quick(start.clone(), frame);
             old.fit = FitSet::parse("lens,light")?;

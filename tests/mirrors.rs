@@ -243,6 +243,60 @@ fn gpu_matches_the_cpu_pipeline_under_gel_light_and_a_camera_response() {
     )));
 }
 
+/// A clear shell ending below the tip (`[shell_end]`) over gel light: the shaders'
+/// shell_end_light against the CPU mirror, on the reference and four contacts; the term
+/// darkens the tip it is given and leaves a sensor without one as it was.
+#[test]
+fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
+    use geltip::sensor::{LedConfig, Leds, ShellEndConfig};
+    let mut c = small_sensor().config.clone();
+    c.leds = Leds::List(
+        (0..9)
+            .map(|i| LedConfig {
+                z_mm: 0.5,
+                width_mm: Some(2.0),
+                widening: Some(0.4),
+                ..LedConfig::gel(
+                    [[1.0, 0.2, 0.1], [0.1, 1.0, 0.2], [0.2, 0.3, 1.0]][i % 3],
+                    40.0 * i as f64,
+                )
+            })
+            .collect(),
+    );
+    let plain = Sensor::from_config("small-gel", c.clone()).unwrap();
+    let f = &c.finger;
+    c.shell_end = Some(ShellEndConfig {
+        z_mm: f.cylinder_length_mm,
+        inner_radius_mm: 0.6 * f.radius_mm,
+        tip_colour: [0.02, 0.05, 0.1],
+        tip_transmit: 0.3,
+        rim_glow: 0.6,
+        rim_width_mm: 1.5,
+    });
+    let sensor = Sensor::from_config("small-shell-end", c).unwrap();
+    let grid = render::HeightfieldGrid::for_sensor(&sensor);
+    let constants = render::uniforms::SensorUniform::new(&sensor, &grid).pipeline_constants();
+    assert!(constants.contains(&("SHELL_END", 1.0)));
+    gpu_matches_cpu(&sensor);
+    // The tip (the image's centre) is darker with the end than without; the picture's edge,
+    // seen through the shell far from the end, is the same.
+    let with = cpu::render(&sensor, None).unwrap();
+    let without = cpu::render(&plain, None).unwrap();
+    let level = |frame: &render::Frame, x: u32, y: u32| {
+        let i = 4 * (y * frame.width + x) as usize;
+        frame.rgba[i..i + 3].iter().map(|&v| v as u32).sum::<u32>()
+    };
+    assert!(level(&with.frame, 75, 60) + 30 < level(&without.frame, 75, 60));
+    assert!(!close_enough(&diff(
+        &rgb(&with.frame),
+        &rgb(&without.frame),
+        3
+    )));
+    let ring = sensor.principal + DVec2::new(sensor.lens.max_rho() * 0.98, 0.0);
+    let (x, y) = (ring.x.round() as u32, ring.y.round() as u32);
+    assert!(level(&with.frame, x, y).abs_diff(level(&without.frame, x, y)) <= 3);
+}
+
 fn gpu_matches_cpu(sensor: &Sensor) {
     let sensor = sensor.clone();
     let mut r = Renderer::new(&sensor).unwrap();

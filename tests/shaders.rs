@@ -510,8 +510,11 @@ fn uniform_structs_equal_the_shaders() {
         member!(S, inverse_gamma),
         member!(S, gel_leds),
         member!(S, camera_response),
+        member!(S, has_shell_end),
         member!(S, pad),
         member!(S, image_circle),
+        member!(S, shell_end),
+        member!(S, shell_tip),
         member!(S, blend_weights),
     ];
     let frame = vec![

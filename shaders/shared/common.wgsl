@@ -62,12 +62,18 @@ struct Sensor {
     // The camera: its colour matrix's rows (xyz) and one over each channel's gamma (xyz).
     colour_matrix: array<vec4<f32>, 3>,
     inverse_gamma: vec4<f32>,
-    // Read as the pipeline constants GEL_LEDS and CAMERA_RESPONSE.
+    // Read as the pipeline constants GEL_LEDS, CAMERA_RESPONSE and SHELL_END.
     gel_leds: u32,
     camera_response: u32,
-    pad: vec2<u32>,
+    has_shell_end: u32,
+    pad: u32,
     // The image circle as a mask: centre (xy), radius squared (z), 1 when there is one (w).
     image_circle: vec4<f32>,
+    // A clear shell's open end (shared/shading.wgsl shell_end_light): x its height (mm),
+    // y its inner radius (mm), z the rim's glow, w its width (mm); the tip's own light
+    // (xyz) and the share of the LEDs' reaching it (w).
+    shell_end: vec4<f32>,
+    shell_tip: vec4<f32>,
     // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
     blend_weights: array<vec4<f32>, 65>,
 }
@@ -155,6 +161,10 @@ override VIGNETTING: bool = false;
 // its own colour matrix and gamma (else the plain gamma 2.2).
 override GEL_LEDS: bool = false;
 override CAMERA_RESPONSE: bool = false;
+// Whether a clear shell under the gel ends below the tip (shared/shading.wgsl
+// shell_end_light), and how sharp its edge is (mm; src/sensor/shell_end.rs SHELL_EDGE_MM).
+override SHELL_END: bool = false;
+override SHELL_EDGE_MM: f32 = 0.08;
 
 const GRID_OBJECT: u32 = 100u;
 // object_kind of the reference frame (no object; every pixel is shaded).

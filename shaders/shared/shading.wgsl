@@ -58,7 +58,26 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
         let spec = power(max(dot(facing, half_vector), 0.0), PAINT_SHININESS);
         colour += sensor.led_colour[i].xyz * (sensor.led_light[i].x * falloff * (sensor.diffuse * lambert + sensor.specular * spec));
     }
+    if SHELL_END {
+        colour = shell_end_light(colour, ray);
+    }
     return colour * sensor.paint_colour.xyz;
+}
+
+// The light `colour` of the skin a camera ray sees, past a clear shell's open end: through
+// the shell it brightens towards the end's edge; through the open end it is the tip's own
+// light plus the share of the LEDs' that reaches it. Mirror: src/render/leds.rs
+// shell_end_light.
+fn shell_end_light(colour: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
+    if ray.z <= 0.0 {
+        return colour;
+    }
+    let end = sensor.shell_end;
+    let outside = end.x * length(ray.xy) / ray.z - end.y;
+    let beyond = 1.0 / (1.0 + exp(clamp(outside / SHELL_EDGE_MM, -40.0, 40.0)));
+    let rim = 1.0 + end.z * exp(-max(outside, 0.0) / end.w);
+    let scale = beyond * sensor.shell_tip.w + (1.0 - beyond) * rim;
+    return colour * scale + sensor.shell_tip.xyz * beyond;
 }
 
 // How bright gel LED i makes the skin at p (normal `normal`): a band up the finger above the

@@ -5,7 +5,7 @@
 
 use super::frames::SATURATED;
 use super::model::{Model, Samples};
-use super::solve::{levenberg_marquardt, solve_dense, Fit};
+use super::solve::{invert, levenberg_marquardt, solve_dense, Fit};
 use crate::render::leds;
 use crate::sensor::Lighting;
 use glam::DVec3;
@@ -218,7 +218,12 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
     let n = model.leds + 1;
     let gamma = d.lighting.camera.gamma;
     let l = model.layout();
-    // Each LED alone, white and of intensity 1, with no ambient light.
+    // Each LED alone, white and of intensity 1, with no ambient light (and past a shell's
+    // end, none of the tip's own: it is added once, below).
+    let alone_end = d.lighting.shell_end.map(|e| crate::sensor::ShellEndConfig {
+        tip_colour: [0.0; 3],
+        ..e
+    });
     let alone: Vec<Lighting> = d
         .lighting
         .leds
@@ -230,35 +235,74 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
             }],
             ambient: DVec3::ZERO,
             paint_colour: DVec3::ONE,
+            shell_end: alone_end,
             ..d.lighting.clone()
         })
         .collect();
+    // The light every LED's and the ambient's pass through past a shell's end: their scale,
+    // and the tip's own light (linear RGB) at each sample.
+    let past_end: Vec<(f64, DVec3)> = (0..samples.len())
+        .map(
+            |i| match (&d.lighting.shell_end, model.hit(&d, samples, i).0) {
+                (Some(end), Some((hit, _))) => {
+                    let (scale, beyond) = leds::shell_end_parts(end, hit.ray);
+                    (scale, DVec3::from_array(end.tip_colour) * beyond)
+                }
+                _ => (1.0, DVec3::ZERO),
+            },
+        )
+        .collect();
     // Each LED's light alone and the ambient's, at every sample.
-    let basis: Vec<Vec<f64>> = (0..samples.len())
+    let basis: Vec<(Vec<f64>, f64)> = (0..samples.len())
         .map(|i| {
             let (hit, x) = model.hit(&d, samples, i);
             let gain = d.lighting.vignette(x);
             let Some((hit, place)) = hit else {
-                return vec![0.0; n];
+                return (vec![0.0; n], 0.0);
             };
             let mut row: Vec<f64> = alone
                 .iter()
                 .map(|light| leds::shade_at(light, &paint, &hit, Some(&place)).x * gain)
                 .collect();
-            row.push(gain);
-            row
+            row.push(gain * past_end[i].0);
+            (row, gain)
+        })
+        .collect();
+    // The light the camera mixed: each sample's levels with the gamma undone and the colour
+    // matrix's mixing undone, so that each channel's light is linear in that channel's
+    // colours alone. A clipped value says only "at least full scale": taken as full scale
+    // here, the fit that follows lets it rise. The tip's own light is held.
+    let camera = &d.lighting.camera;
+    let unmix = (!camera.is_default())
+        .then(|| invert(&camera.colour_matrix.concat(), 3))
+        .flatten();
+    let light: Vec<[f64; 3]> = samples
+        .observed
+        .iter()
+        .zip(&basis)
+        .zip(&past_end)
+        .map(|((obs, (_, gain)), (_, tip))| {
+            let y: [f64; 3] = std::array::from_fn(|c| (obs[c].min(255.0) / 255.0).powf(gamma[c]));
+            let x: [f64; 3] = match &unmix {
+                Some(m) => std::array::from_fn(|k| (0..3).map(|c| m[k * 3 + c] * y[c]).sum()),
+                None => y,
+            };
+            std::array::from_fn(|k| x[k] - gain * tip[k])
         })
         .collect();
     for c in 0..3 {
         let mut ata = vec![0.0; n * n];
         let mut atb = vec![0.0; n];
-        for (row, obs) in basis.iter().zip(&samples.observed) {
-            if obs[c] <= 0.5 {
+        for (((row, _), obs), y) in basis.iter().zip(&samples.observed).zip(&light) {
+            // Dark values say little about a channel's light (and mixed, about any).
+            let dark = match unmix {
+                Some(_) => obs.iter().any(|&v| v <= 0.5),
+                None => obs[c] <= 0.5,
+            };
+            if dark {
                 continue;
             }
-            // A clipped value says only "at least full scale": taken as full scale here,
-            // the fit that follows lets it rise.
-            let y = (obs[c].min(255.0) / 255.0).powf(gamma[c]);
+            let y = y[c];
             for i in 0..n {
                 for j in 0..n {
                     ata[i * n + j] += row[i] * row[j];

@@ -1,8 +1,8 @@
 //! The empty finger's picture as a function of the values calibration fits: each LED's
 //! place, colour and spread (point LEDs: height, distance from the axis, spread, fall-off;
 //! gel LEDs: their azimuth, and the band all of them share), the ambient light, the paint's
-//! shine (point LEDs), the camera's vignetting, colour matrix and gamma, and, when asked,
-//! the finger's length. It is the renderer's own light model
+//! shine (point LEDs), the camera's vignetting, colour matrix and gamma, a clear shell's
+//! open end where the sensor has one, and, when asked, the finger's length. It is the renderer's own light model
 //! ([`crate::render::leds::shade`], [`crate::render::leds::record`]) evaluated at sampled
 //! pixels, so the fitted values mean in `sensor.toml` what they meant while fitting.
 
@@ -47,8 +47,15 @@ pub struct Layout {
     pub principal: Option<usize>,
     /// The lens's focal length (px).
     pub focal: Option<usize>,
+    /// A clear shell's open end, when the start sensor has one: its height (mm), the tip's
+    /// own light (RGB), the share of the LEDs' reaching the tip, the rim's glow and width
+    /// (mm). Its inner radius is held (the build's).
+    pub shell_end: Option<usize>,
     pub len: usize,
 }
+
+/// Values of a shell's open end ([`Layout::shell_end`]).
+pub const SHELL_END_VALUES: usize = 7;
 
 /// The pixels a fit compares: where each sits and which ray it casts.
 #[derive(Debug, Clone)]
@@ -163,6 +170,12 @@ impl Model {
         let length = self.geometry.then(|| take(1));
         let principal = self.principal.map(|_| take(2));
         let focal = self.focal.map(|_| take(1));
+        let shell_end = self
+            .start
+            .config
+            .shell_end
+            .is_some()
+            .then(|| take(SHELL_END_VALUES));
         Layout {
             per_led,
             colour,
@@ -174,6 +187,7 @@ impl Model {
             length,
             principal,
             focal,
+            shell_end,
             len: at,
         }
     }
@@ -243,6 +257,20 @@ impl Model {
         }
         if l.focal.is_some() {
             out.push("lens.focal_px".to_string());
+        }
+        if l.shell_end.is_some() {
+            out.extend(
+                [
+                    "shell_end.z_mm",
+                    "shell_end.tip_colour[0]",
+                    "shell_end.tip_colour[1]",
+                    "shell_end.tip_colour[2]",
+                    "shell_end.tip_transmit",
+                    "shell_end.rim_glow",
+                    "shell_end.rim_width_mm",
+                ]
+                .map(String::from),
+            );
         }
         out
     }
@@ -318,6 +346,19 @@ impl Model {
         if let Some(low) = self.focal {
             let f = self.start.lens.focal_px;
             out.push(b(f * low, f * (1.0 + FOCAL_REACH), 1e-4 * f));
+        }
+        if let Some(end) = &self.start.config.shell_end {
+            // The end between the shell's own radius above the camera and the tip; a tip
+            // that may get up to all the LEDs' light back; a rim at most ten times as bright,
+            // fading over 0.1 mm to the finger's size.
+            let top = f.cylinder_length + f.radius;
+            out.push(b(end.inner_radius_mm, top * 0.999, 1e-4));
+            out.extend((0..3).map(|_| b(0.0, 50.0, 1e-6)));
+            out.extend([
+                b(0.0, 1.0, 1e-5),
+                b(-0.9, 10.0, 1e-5),
+                b(0.1, 2.0 * f.radius, 1e-4),
+            ]);
         }
         out
     }
@@ -403,6 +444,11 @@ impl Model {
         if l.focal.is_some() {
             p.push(s.lens.focal_px);
         }
+        if let Some(end) = &s.config.shell_end {
+            p.push(end.z_mm);
+            p.extend(end.tip_colour);
+            p.extend([end.tip_transmit, end.rim_glow, end.rim_width_mm]);
+        }
         p
     }
 
@@ -476,6 +522,17 @@ impl Model {
                 vignetting: [p[v], p[v + 1]],
                 finger,
                 camera,
+                shell_end: l.shell_end.and_then(|i| {
+                    let end = self.start.config.shell_end?;
+                    Some(crate::sensor::ShellEndConfig {
+                        z_mm: p[i],
+                        tip_colour: [p[i + 1], p[i + 2], p[i + 3]],
+                        tip_transmit: p[i + 4],
+                        rim_glow: p[i + 5],
+                        rim_width_mm: p[i + 6],
+                        ..end
+                    })
+                }),
             },
             specular,
             shininess,
@@ -566,6 +623,7 @@ impl Model {
         c.light.ambient = Some(d.lighting.ambient.to_array());
         c.light.vignetting = d.lighting.vignetting;
         c.camera = d.lighting.camera;
+        c.shell_end = d.lighting.shell_end;
         c.leds = Leds::List(
             d.lighting
                 .leds

@@ -58,8 +58,7 @@ pub fn gaussian_elimination(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> 
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-/// The inverse of a symmetric positive (semi-)definite n x n matrix, column by column;
-/// `None` when singular.
+/// The inverse of an n x n matrix (row-major), column by column; `None` when singular.
 pub fn invert(a: &[f64], n: usize) -> Option<Vec<f64>> {
     let mut inv = vec![0.0; n * n];
     for j in 0..n {

@@ -7,7 +7,10 @@
 
 use super::camera::SkinHit;
 use crate::finger::Finger;
-use crate::sensor::{CameraConfig, GelSpread, LedKind, Lighting, PaintConfig, Sensor};
+use crate::sensor::shell_end::SHELL_EDGE_MM;
+use crate::sensor::{
+    CameraConfig, GelSpread, LedKind, Lighting, PaintConfig, Sensor, ShellEndConfig,
+};
 use glam::{DVec2, DVec3};
 
 /// Relative emission of an LED towards unit direction `towards`: it shines up the finger.
@@ -58,7 +61,31 @@ pub fn shade_at(
         colour += led.colour
             * (led.intensity * falloff * (paint.diffuse * lambert + paint.specular * spec));
     }
+    if let Some(end) = &light.shell_end {
+        colour = shell_end_light(end, colour, hit.ray);
+    }
     colour * light.paint_colour
+}
+
+/// The light `colour` of the skin a camera ray `ray` sees, past a clear shell's open end
+/// ([`ShellEndConfig`]): through the shell it brightens towards the end's edge; through the
+/// open end it is the tip's own light plus the share of the LEDs' that reaches it.
+pub fn shell_end_light(end: &ShellEndConfig, colour: DVec3, ray: DVec3) -> DVec3 {
+    let (scale, beyond) = shell_end_parts(end, ray);
+    colour * scale + DVec3::from_array(end.tip_colour) * beyond
+}
+
+/// [`shell_end_light`] as colour x scale + tip_colour x beyond: (scale, beyond), beyond the
+/// share of the ray that passes the open end. A ray that never rises to the end's plane
+/// passes through the shell far from its edge.
+pub fn shell_end_parts(end: &ShellEndConfig, ray: DVec3) -> (f64, f64) {
+    if ray.z <= 0.0 {
+        return (1.0, 0.0);
+    }
+    let outside = end.z_mm * ray.truncate().length() / ray.z - end.inner_radius_mm;
+    let beyond = 1.0 / (1.0 + (outside / SHELL_EDGE_MM).clamp(-40.0, 40.0).exp());
+    let rim = 1.0 + end.rim_glow * (-outside.max(0.0) / end.rim_width_mm).exp();
+    (beyond * end.tip_transmit + (1.0 - beyond) * rim, beyond)
 }
 
 /// Where a skin point lies for the gel's light: its azimuth about the axis, its latitude

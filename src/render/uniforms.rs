@@ -61,14 +61,20 @@ pub struct SensorUniform {
     /// (xyz; w unused).
     pub colour_matrix: [[f32; 4]; 3],
     pub inverse_gamma: [f32; 4],
-    /// Whether any LED is a gel LED, and whether the camera is not the plain gamma 2.2
-    /// (pipeline constants GEL_LEDS and CAMERA_RESPONSE; the shaders do not read these).
+    /// Whether any LED is a gel LED, whether the camera is not the plain gamma 2.2, and
+    /// whether a clear shell ends below the tip (pipeline constants GEL_LEDS,
+    /// CAMERA_RESPONSE and SHELL_END; the shaders do not read these).
     pub gel_leds: u32,
     pub camera_response: u32,
-    pub pad: [u32; 2],
+    pub has_shell_end: u32,
+    pub pad: u32,
     /// The image circle when the sensor file gives one as a mask: centre (xy), radius
     /// squared (z), 1 when there is one (w).
     pub image_circle: [f32; 4],
+    /// The shell's open end: height, inner radius, rim glow and rim width (mm); the tip's
+    /// own light (xyz) and tip_transmit (w). Zero without one.
+    pub shell_end: [f32; 4],
+    pub shell_tip: [f32; 4],
     /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
     /// [`super::elastomer::blend_weights`].
     pub blend_weights: [[f32; 4]; BLEND_WEIGHTS],
@@ -78,7 +84,7 @@ pub struct SensorUniform {
 pub const BLEND_WEIGHTS: usize = super::elastomer::MAX_BLEND_TAPS as usize + 1;
 
 const _: () =
-    assert!(std::mem::size_of::<SensorUniform>() == 288 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
+    assert!(std::mem::size_of::<SensorUniform>() == 320 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -230,9 +236,22 @@ impl SensorUniform {
             inverse_gamma: row(camera.gamma.map(|g| 1.0 / g)),
             gel_leds: light.has_gel_leds() as u32,
             camera_response: !camera.is_default() as u32,
-            pad: [0; 2],
+            has_shell_end: light.shell_end.is_some() as u32,
+            pad: 0,
             image_circle: c.image.circle.map_or([0.0; 4], |[cx, cy, r]| {
                 [cx as f32, cy as f32, (r as f32) * (r as f32), 1.0]
+            }),
+            shell_end: light.shell_end.map_or([0.0; 4], |e| {
+                [
+                    e.z_mm as f32,
+                    e.inner_radius_mm as f32,
+                    e.rim_glow as f32,
+                    e.rim_width_mm as f32,
+                ]
+            }),
+            shell_tip: light.shell_end.map_or([0.0; 4], |e| {
+                let [r, g, b] = e.tip_colour.map(|c| c as f32);
+                [r, g, b, e.tip_transmit as f32]
             }),
             blend_weights,
         }
@@ -241,7 +260,7 @@ impl SensorUniform {
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
     /// fields that shape control flow, and the shading's exponents, fixed per sensor so the
     /// driver can fold the lens switch, unroll the loops and multiply whole powers out.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 11] {
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 13] {
         // Nested exactly as the shader steps them: the wide step twice the narrow one in f32.
         let nested = self.wide_step_mm == 2.0 * self.narrow_step_mm;
         [
@@ -263,6 +282,8 @@ impl SensorUniform {
             ),
             ("GEL_LEDS", self.gel_leds as f64),
             ("CAMERA_RESPONSE", self.camera_response as f64),
+            ("SHELL_END", self.has_shell_end as f64),
+            ("SHELL_EDGE_MM", crate::sensor::shell_end::SHELL_EDGE_MM),
         ]
     }
 }

@@ -1,6 +1,7 @@
 //! The sensor file as people write it (TOML), loaded with serde and validated field by field.
 
 use super::lighting::{CameraConfig, Leds, LightConfig, Noise};
+use super::shell_end::ShellEndConfig;
 use crate::checks::{
     config_finite as finite, config_non_negative as non_negative,
     config_positive as finite_positive,
@@ -156,6 +157,9 @@ pub struct SensorConfig {
     pub light: LightConfig,
     #[serde(default, skip_serializing_if = "CameraConfig::is_default")]
     pub camera: CameraConfig,
+    /// A clear shell under the gel that ends, open, below the tip (none by default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shell_end: Option<ShellEndConfig>,
     #[serde(default)]
     pub paint: PaintConfig,
     #[serde(default)]
@@ -358,6 +362,9 @@ impl SensorConfig {
         self.leds.validate(f.radius_mm, f.cylinder_length_mm)?;
         self.light.validate()?;
         self.camera.validate()?;
+        if let Some(end) = &self.shell_end {
+            end.validate(f.radius_mm, f.cylinder_length_mm + f.radius_mm)?;
+        }
         for (k, c) in self.paint.colour.iter().enumerate() {
             non_negative(&format!("paint.colour[{k}]"), *c)?;
         }

@@ -326,6 +326,8 @@ pub struct Lighting {
     pub finger: Finger,
     /// How the camera turns light into pixel values.
     pub camera: CameraConfig,
+    /// Where a clear shell under the gel ends below the tip, if it does.
+    pub shell_end: Option<super::ShellEndConfig>,
 }
 
 /// `[camera]`: how the camera turns the light reaching it into 8-bit values: a colour

@@ -8,6 +8,7 @@
 
 pub mod config;
 pub mod lighting;
+pub mod shell_end;
 
 pub use config::{
     ElastomerConfig, FingerConfig, ImageConfig, LensConfig, PaintConfig, RenderConfig,
@@ -17,6 +18,7 @@ pub use lighting::{
     CameraConfig, GelSpread, Led, LedColours, LedConfig, LedKind, LedKindName, Leds, LedsConfig,
     LightConfig, Lighting, Noise, MAX_LEDS,
 };
+pub use shell_end::ShellEndConfig;
 
 use crate::error::{GeltipError, Result};
 use crate::finger::{Finger, SurfacePoint};
@@ -164,6 +166,7 @@ impl Sensor {
             vignetting: c.light.vignetting,
             finger: self.finger,
             camera: c.camera,
+            shell_end: c.shell_end,
         }
     }
 
