@@ -299,8 +299,33 @@ fn gel_leds_and_a_camera_response_load_and_round_trip() {
 
 /// A gel LED's band, and the camera, out of range are refused naming the field; a point LED
 /// given a band is refused too.
+/// A `[shell_end]` table whose keys are sound but for `bad` (a key = value line replacing
+/// that key's).
+fn shell_end(bad: &str) -> String {
+    let key = bad.split(' ').next().unwrap();
+    [
+        "z_mm = 20.0",
+        "inner_radius_mm = 5.0",
+        "tip_colour = [0.1, 0.1, 0.2]",
+        "tip_transmit = 0.3",
+        "rim_glow = 0.4",
+        "rim_width_mm = 2.0",
+    ]
+    .iter()
+    .map(|line| if line.starts_with(key) { bad } else { line })
+    .fold("[shell_end]\n".to_string(), |text, line| text + line + "\n")
+}
+
 #[test]
-fn gel_leds_and_the_camera_are_refused_by_field() {
+fn gel_leds_the_camera_and_a_shell_end_are_refused_by_field() {
+    // The shell's end the bad cases below spoil one key of loads as it is,
+    // and is written back the same.
+    let sound = Sensor::from_toml("sound", &(paper_toml() + "\n" + &shell_end("z_mm = 20.0")))
+        .unwrap()
+        .config;
+    assert_eq!(sound.shell_end.map(|e| e.z_mm), Some(20.0));
+    let text = toml::to_string(&sound).unwrap();
+    assert_eq!(SensorConfig::from_toml(&text, "written").unwrap(), sound);
     for (bad, field) in [
         (
             "[[leds]]\ncolour = [1.0, 0.0, 0.0]\nazimuth_deg = 0.0\nwidth_mm = 2.0\n",
@@ -324,7 +349,18 @@ fn gel_leds_and_the_camera_are_refused_by_field() {
             "[camera]\ncolour_matrix = [[1.0, 0.0, 0.0], [0.0, nan, 0.0], [0.0, 0.0, 1.0]]\n",
             "camera.colour_matrix[1][1]",
         ),
-    ] {
+        ("[shell_end]\nz_mm = 20.0\ninner_radius_mm = 5.0\n", "shell_end"),
+    ]
+    .map(|(bad, field)| (bad.to_string(), field))
+    .into_iter()
+    .chain([
+        (shell_end("inner_radius_mm = 30.0"), "shell_end.inner_radius_mm"),
+        (shell_end("z_mm = 0.0"), "shell_end.z_mm"),
+        (shell_end("tip_colour = [0.1, -0.1, 0.1]"), "shell_end.tip_colour[1]"),
+        (shell_end("rim_glow = -2.0"), "shell_end.rim_glow"),
+        (shell_end("rim_width_mm = inf"), "shell_end.rim_width_mm"),
+    ]) {
+        let bad = bad.as_str();
         let text = paper_toml() + "\n" + bad;
         let err = Sensor::from_toml("bad", &text).expect_err(bad).to_string();
         assert!(err.contains(field), "'{err}' does not name {field}");
