@@ -239,33 +239,29 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
             ..d.lighting.clone()
         })
         .collect();
-    // The light every LED's and the ambient's pass through past a shell's end: their scale,
-    // and the tip's own light (linear RGB) at each sample.
-    let past_end: Vec<(f64, DVec3)> = (0..samples.len())
-        .map(
-            |i| match (&d.lighting.shell_end, model.hit(&d, samples, i).0) {
-                (Some(end), Some((hit, _))) => {
-                    let (scale, beyond) = leds::shell_end_parts(end, hit.ray);
-                    (scale, DVec3::from_array(end.tip_colour) * beyond)
-                }
-                _ => (1.0, DVec3::ZERO),
-            },
-        )
-        .collect();
-    // Each LED's light alone and the ambient's, at every sample.
-    let basis: Vec<(Vec<f64>, f64)> = (0..samples.len())
+    // Each LED's light alone and the ambient's at every sample (the vignetting's gain, and
+    // past a shell's end the scale every LED's and the ambient's light pass through), with
+    // the tip's own light (linear RGB, vignetted) it adds.
+    let basis: Vec<(Vec<f64>, DVec3)> = (0..samples.len())
         .map(|i| {
             let (hit, x) = model.hit(&d, samples, i);
             let gain = d.lighting.vignette(x);
             let Some((hit, place)) = hit else {
-                return (vec![0.0; n], 0.0);
+                return (vec![0.0; n], DVec3::ZERO);
+            };
+            let (scale, tip) = match &d.lighting.shell_end {
+                Some(end) => {
+                    let (scale, beyond) = leds::shell_end_parts(end, hit.ray);
+                    (scale, DVec3::from_array(end.tip_colour) * beyond)
+                }
+                None => (1.0, DVec3::ZERO),
             };
             let mut row: Vec<f64> = alone
                 .iter()
                 .map(|light| leds::shade_at(light, &paint, &hit, Some(&place)).x * gain)
                 .collect();
-            row.push(gain * past_end[i].0);
-            (row, gain)
+            row.push(gain * scale);
+            (row, tip * gain)
         })
         .collect();
     // The light the camera mixed: each sample's levels with the gamma undone and the colour
@@ -280,14 +276,13 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
         .observed
         .iter()
         .zip(&basis)
-        .zip(&past_end)
-        .map(|((obs, (_, gain)), (_, tip))| {
+        .map(|(obs, (_, tip))| {
             let y: [f64; 3] = std::array::from_fn(|c| (obs[c].min(255.0) / 255.0).powf(gamma[c]));
             let x: [f64; 3] = match &unmix {
                 Some(m) => std::array::from_fn(|k| (0..3).map(|c| m[k * 3 + c] * y[c]).sum()),
                 None => y,
             };
-            std::array::from_fn(|k| x[k] - gain * tip[k])
+            std::array::from_fn(|k| x[k] - tip[k])
         })
         .collect();
     for c in 0..3 {

@@ -2,9 +2,10 @@
 //! place, colour and spread (point LEDs: height, distance from the axis, spread, fall-off;
 //! gel LEDs: their azimuth, and the band all of them share), the ambient light, the paint's
 //! shine (point LEDs), the camera's vignetting, colour matrix and gamma, a clear shell's
-//! open end where the sensor has one, and, when asked, the finger's length. It is the renderer's own light model
-//! ([`crate::render::leds::shade`], [`crate::render::leds::record`]) evaluated at sampled
-//! pixels, so the fitted values mean in `sensor.toml` what they meant while fitting.
+//! open end where the sensor has one, and, when asked, the finger's length. It is the
+//! renderer's own light model ([`crate::render::leds::shade`],
+//! [`crate::render::leds::record`]) evaluated at sampled pixels, so the fitted values mean in
+//! `sensor.toml` what they meant while fitting.
 
 use crate::finger::Finger;
 use crate::lens::Lens;
