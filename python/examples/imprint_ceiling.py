@@ -20,7 +20,8 @@ each imprint. This asks what that score could be at best, from the real frames a
 
 Reads the real set (`--real`, labels.json and its frames) and renders the sensor's empty
 finger with `geltip render` (--geltip, on PATH or this checkout's release build). Needs NumPy
-and Pillow. Prints a Markdown table (and writes it to --out).
+and Pillow. Prints a Markdown table (and writes it to --out), then the whole set's figures
+as one JSON line.
 """
 import argparse
 import json
@@ -90,11 +91,17 @@ def main():
     ap.add_argument("--sensor", default="allsight", help="the sensor whose empty render is scored")
     ap.add_argument("--geltip", help="the geltip command (default: on PATH or target/release)")
     ap.add_argument("--out", type=Path, help="also write the table here")
+    ap.add_argument("--every", type=int, default=1,
+                    help="use the frames of every N-th press only (a quicker, rougher check)")
     args = ap.parse_args()
+    if args.every < 1:
+        sys.exit(f"error: --every must be at least 1, got {args.every}")
     labels = args.real / "labels.json"
     if not labels.is_file():
         sys.exit(f"error: {labels}: not found (the real set; see --real)")
     frames = [f for f in json.loads(labels.read_text())["frames"] if f["num"] != 11]
+    presses = list(dict.fromkeys(f["reference_press"] for f in frames))[:: args.every]
+    frames = [f for f in frames if f["reference_press"] in set(presses)]
     with tempfile.TemporaryDirectory() as tmp:
         empty_png = Path(tmp) / "empty.png"
         subprocess.run([geltip_binary(args.geltip), "render", "--sensor", args.sensor,
@@ -178,6 +185,7 @@ def main():
         "|---|---|---|---|---|---|---|---|",
     ]
     order = sorted(groups, key=lambda g: (g[:2], int(g.split()[-1]))) + ["all"]
+    summary = {}
     for key in order:
         s = sums[key]
         n = s[3]
@@ -187,10 +195,14 @@ def main():
         count = len(groups[key]) if key != "all" else len(rows)
         lines.append(f"| {key} | {count} | " + " | ".join(f"{x:.1f}" for x in imprint + [bg] + both)
                      + " |")
+        summary = {"frames": count, "no_imprint_db": imprint[0], "push_point_look_db": imprint[1],
+                   "nearest_look_db": imprint[2], "light_db": bg, "render_best_push_point_db": both[0],
+                   "render_best_nearest_db": both[1]}
     table = "\n".join(lines)
     print(table)
     if args.out:
         args.out.write_text(table + "\n")
+    print(json.dumps({k: round(v, 2) for k, v in summary.items()}))
 
 
 if __name__ == "__main__":
