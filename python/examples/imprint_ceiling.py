@@ -19,21 +19,20 @@ each imprint. This asks what that score could be at best, from the real frames a
   A render's error in a window is both, so the last columns add the two errors.
 
 Reads the real set (`--real`, labels.json and its frames) and renders the sensor's empty
-finger with `geltip render` (--geltip, on PATH or this checkout's release build). Needs NumPy
-and Pillow. Prints a Markdown table (and writes it to --out), then the whole set's figures
-as one JSON line.
+finger with the geltip package (`pip install ./python`). Needs NumPy and Pillow. Prints a
+Markdown table (and writes it to --out), then the whole set's figures as one JSON line.
 """
 import argparse
 import json
 import math
-import shutil
-import subprocess
+import os
 import sys
-import tempfile
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
+
+import geltip
 
 try:
     from PIL import Image
@@ -44,18 +43,6 @@ HALF = 45  # the patch's half side (px): a 40 px window and room to move
 WINDOW = 40
 SHIFT = 8
 NEAREST = 4
-
-
-def geltip_binary(given):
-    if given:
-        return given
-    found = shutil.which("geltip")
-    if found:
-        return found
-    here = Path(__file__).resolve().parents[2] / "target" / "release" / "geltip"
-    if here.is_file():
-        return str(here)
-    sys.exit("error: no `geltip` command: put it on PATH, pass --geltip, or cargo build --release")
 
 
 def load(path):
@@ -89,7 +76,6 @@ def main():
     ap.add_argument("--real", default="../shared/real/allsight", type=Path,
                     help="the real set's folder (labels.json and its frames)")
     ap.add_argument("--sensor", default="allsight", help="the sensor whose empty render is scored")
-    ap.add_argument("--geltip", help="the geltip command (default: on PATH or target/release)")
     ap.add_argument("--out", type=Path, help="also write the table here")
     ap.add_argument("--every", type=int, default=1,
                     help="use the frames of every N-th press only (a quicker, rougher check)")
@@ -102,11 +88,8 @@ def main():
     frames = [f for f in json.loads(labels.read_text())["frames"] if f["num"] != 11]
     presses = list(dict.fromkeys(f["reference_press"] for f in frames))[:: args.every]
     frames = [f for f in frames if f["reference_press"] in set(presses)]
-    with tempfile.TemporaryDirectory() as tmp:
-        empty_png = Path(tmp) / "empty.png"
-        subprocess.run([geltip_binary(args.geltip), "render", "--sensor", args.sensor,
-                        "--reference", "-o", str(empty_png)], check=True, capture_output=True)
-        empty = load(empty_png)
+    os.environ.setdefault("XDG_RUNTIME_DIR", "/tmp")
+    empty = geltip.Simulator(geltip.Sensor(args.sensor)).reference().astype(np.float64)
 
     h, w, _ = empty.shape
     centre = np.array([w / 2, h / 2])

@@ -4,6 +4,7 @@ import json
 import os
 import struct
 import subprocess
+import sys
 import zlib
 from pathlib import Path
 
@@ -43,6 +44,22 @@ def cli():
         return json.loads(p.stdout)
 
     return run
+
+
+ALLSIGHT = REPO / ".." / "shared" / "real" / "allsight"
+
+
+def run_example(name, *args):
+    """python/examples/`name` with `args`, on the real AllSight set (the test is skipped
+    where ../shared/real is absent): the finished process, its output captured."""
+    if not (ALLSIGHT / "labels.json").is_file():
+        pytest.skip(f"{ALLSIGHT} is absent (real sensor frames)")
+    env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
+    return subprocess.run(
+        [sys.executable, str(REPO / "python" / "examples" / name), "--real", str(ALLSIGHT),
+         *map(str, args)],
+        capture_output=True, text=True, env=env,
+    )
 
 
 @pytest.fixture(scope="session")

@@ -3,26 +3,14 @@ without it), on every other press: the change predicted from the other presses o
 push point beats no imprint clearly, the presses nearest in azimuth beat all of the push
 point's, and the light alone in those windows scores about what the whole circle does."""
 import json
-import os
 import subprocess
 import sys
 
-import pytest
-
-from conftest import REPO, _find_cli
-
-REAL = REPO / ".." / "shared" / "real" / "allsight"
+from conftest import REPO, run_example
 
 
 def test_the_ceiling_of_any_imprint_look():
-    if not (REAL / "labels.json").is_file():
-        pytest.skip(f"{REAL} is absent (real sensor frames)")
-    env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
-    run = subprocess.run(
-        [sys.executable, str(REPO / "python" / "examples" / "imprint_ceiling.py"),
-         "--real", str(REAL), "--every", "2", "--geltip", str(_find_cli())],
-        capture_output=True, text=True, env=env,
-    )
+    run = run_example("imprint_ceiling.py", "--every", "2")
     assert run.returncode == 0, run.stderr[-2000:]
     got = json.loads(run.stdout.strip().splitlines()[-1])
     assert got["frames"] == 180, got

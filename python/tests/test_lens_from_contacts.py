@@ -6,26 +6,12 @@ fitted to the imprints' places puts the principal point within a few pixels of t
 centre (where the preset has it), far from where the light alone would put it."""
 import json
 import math
-import os
-import subprocess
-import sys
 
-import pytest
-
-from conftest import REPO
-
-REAL = REPO / ".." / "shared" / "real" / "allsight"
+from conftest import run_example
 
 
 def test_the_contact_frames_pin_the_focal_length():
-    if not (REAL / "labels.json").is_file():
-        pytest.skip(f"{REAL} is absent (real sensor frames)")
-    env = dict(os.environ, PYTHONPATH=str(REPO / "python"))
-    run = subprocess.run(
-        [sys.executable, str(REPO / "python" / "examples" / "lens_from_contacts.py"),
-         "--real", str(REAL), "--every", "4"],
-        capture_output=True, text=True, env=env,
-    )
+    run = run_example("lens_from_contacts.py", "--every", "4")
     assert run.returncode == 0, run.stderr[-2000:]
     got = json.loads(run.stdout.strip().splitlines()[-1])
     assert got["frames"] >= 80
