@@ -1,6 +1,6 @@
 """How closely any imprint look could match a real sensor's imprints, and what its light allows.
 
-    python python/examples/imprint_ceiling.py                # the AllSight set, about 3 min
+    python python/examples/imprint_ceiling.py                # the AllSight set, about 30 s
     python python/examples/imprint_ceiling.py --out ceiling.md
 
 `geltip imprint` scores a rendered imprint against the real frame inside a 40 px window round
@@ -12,9 +12,9 @@ each imprint. This asks what that score could be at best, from the real frames a
   of the labelled azimuth).
 - It is then predicted from other presses only (leave one out): their mean change relative
   to the local level (the reference), moved up to 8 px and scaled to the frame. From every
-  other press of its push point: the best a look that knows the push point, the depth and the
-  place could do (a render knows no more). From the 4 presses nearest in azimuth: what a look
-  that also knew how the imprint changes round the finger could do.
+  other press of its push point: the best a look could do that is the same all round the
+  finger but for the local light, the depth and the place. From the 4 presses nearest in
+  azimuth: what a look that also knew how the imprint changes round the finger could do.
 - The light: the sensor's empty render against each press's t = 0 frame in the same windows.
   A render's error in a window is both, so the last columns add the two errors.
 
@@ -86,8 +86,8 @@ def main():
     if not labels.is_file():
         sys.exit(f"error: {labels}: not found (the real set; see --real)")
     frames = [f for f in json.loads(labels.read_text())["frames"] if f["num"] != 11]
-    presses = list(dict.fromkeys(f["reference_press"] for f in frames))[:: args.every]
-    frames = [f for f in frames if f["reference_press"] in set(presses)]
+    presses = set(list(dict.fromkeys(f["reference_press"] for f in frames))[:: args.every])
+    frames = [f for f in frames if f["reference_press"] in presses]
     os.environ.setdefault("XDG_RUNTIME_DIR", "/tmp")
     empty = geltip.Simulator(geltip.Sensor(args.sensor)).reference().astype(np.float64)
 
@@ -117,16 +117,16 @@ def main():
         py = cy + u * out[1] + v * across[1]
         group = f"{f['image'][:2]} push {f['num']}"
         rows.append({"group": group, "azimuth": f["image_azimuth_deg"],
-                     "change": bilinear(change, px, py), "ref": bilinear(ref, px, py)})
+                     "change": bilinear(change, px, py),
+                     "level": np.maximum(bilinear(ref, px, py), 8.0)})
         window = ((xx - cx) ** 2 + (yy - cy) ** 2 <= WINDOW**2) & (radius <= circle)
         light[group][0] += ((empty - ref)[window] ** 2).sum()
         light[group][1] += 3 * int(window.sum())
         print(f"\rimprints {k + 1}/{len(frames)}", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
 
-    def best_fit(rel, change, ref):
+    def best_fit(rel, change, level):
         """The smallest squared error of rel (moved, times the level, scaled) on the disc."""
-        level = np.maximum(ref, 8.0)
         c = change[disc]
         best = np.inf
         for dx in range(-SHIFT, SHIFT + 1, 2):
@@ -139,24 +139,23 @@ def main():
     groups = defaultdict(list)
     for i, r in enumerate(rows):
         groups[r["group"]].append(i)
-    relative = [r["change"] / np.maximum(r["ref"], 8.0) for r in rows]
+    relative = [r["change"] / r["level"] for r in rows]
     sums = defaultdict(lambda: np.zeros(4))
     for group, members in groups.items():
         for n, i in enumerate(members):
             others = [j for j in members if j != i]
             turn = [abs(math.remainder(rows[j]["azimuth"] - rows[i]["azimuth"], 360)) for j in others]
             near = [others[k] for k in np.argsort(turn)[:NEAREST]]
-            c, ref = rows[i]["change"], rows[i]["ref"]
+            c, level = rows[i]["change"], rows[i]["level"]
             errors = [(c[disc] ** 2).sum(),
-                      best_fit(np.mean([relative[j] for j in others], 0), c, ref),
-                      best_fit(np.mean([relative[j] for j in near], 0), c, ref),
+                      best_fit(np.mean([relative[j] for j in others], 0), c, level),
+                      best_fit(np.mean([relative[j] for j in near], 0), c, level),
                       3 * disc.sum()]
             for key in (group, "all"):
                 sums[key] += errors
             print(f"\r{group}: {n + 1}/{len(members)}   ", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
-    for key in ("all",):
-        light[key] = [sum(v[0] for v in light.values()), sum(v[1] for v in light.values())]
+    light["all"] = [sum(v[0] for v in light.values()), sum(v[1] for v in light.values())]
 
     lines = [
         f"Inside {WINDOW} px of each real imprint (`{labels}`, push points 2 to 10), PSNR in dB.",
@@ -168,7 +167,6 @@ def main():
         "|---|---|---|---|---|---|---|---|",
     ]
     order = sorted(groups, key=lambda g: (g[:2], int(g.split()[-1]))) + ["all"]
-    summary = {}
     for key in order:
         s = sums[key]
         n = s[3]
@@ -178,9 +176,10 @@ def main():
         count = len(groups[key]) if key != "all" else len(rows)
         lines.append(f"| {key} | {count} | " + " | ".join(f"{x:.1f}" for x in imprint + [bg] + both)
                      + " |")
-        summary = {"frames": count, "no_imprint_db": imprint[0], "push_point_look_db": imprint[1],
-                   "nearest_look_db": imprint[2], "light_db": bg, "render_best_push_point_db": both[0],
-                   "render_best_nearest_db": both[1]}
+    # The loop ends on "all": the whole set's figures.
+    summary = {"frames": count, "no_imprint_db": imprint[0], "push_point_look_db": imprint[1],
+               "nearest_look_db": imprint[2], "light_db": bg, "render_best_push_point_db": both[0],
+               "render_best_nearest_db": both[1]}
     table = "\n".join(lines)
     print(table)
     if args.out:
