@@ -1,7 +1,7 @@
 """python/examples/train_detector.py --quick: the sim-to-real check end to end (render,
-compose on real no-contact frames, train, score the real set), and its predictions file
-scored by `geltip evaluate --predictions` gives the same report as the run itself. Skipped
-without PyTorch or the real frames (../shared/real)."""
+compose on real no-contact frames, train, score the real set and held-out geltip frames),
+and its predictions file scored by `geltip evaluate --predictions` gives the same report as
+the run itself. Skipped without PyTorch or the real frames (../shared/real)."""
 import json
 import os
 import subprocess
@@ -33,6 +33,11 @@ def test_the_quick_run_scores_the_real_set_and_its_predictions_agree(tmp_path):
     assert len(training["epochs"]) == 2 and training["samples"] > 400
     lines = (out / "predictions.jsonl").read_text().splitlines()
     assert [json.loads(l)["sample"] for l in lines] == list(range(600))
+    # The held-out geltip frames (60 in a quick run, a quarter empty) scored besides.
+    check = training["synthetic_check"]
+    assert check["visible"] + check["empty_frames"] == 60 and check["empty_frames"] > 0
+    summary = json.loads((out / "eval-synthetic" / "summary.json").read_text())
+    assert summary["samples"] == 60 and summary["detector"] == "synthetic-cnn"
     # The file, scored by the CLI, gives the run's own report.
     again = tmp_path / "again"
     p = subprocess.run(
