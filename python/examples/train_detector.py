@@ -1,15 +1,17 @@
 """A contact detector trained on geltip's synthetic frames only, scored on a real sensor's.
 
-    python python/examples/train_detector.py                      # the full run (about 45 min on 2 cores)
+    python python/examples/train_detector.py                      # the full run (about 11 min on 2 cores)
     python python/examples/train_detector.py --quick --out runs/q  # a smoke run (a few minutes)
 
 The sim-to-real check: `geltip dataset` renders contacts on the calibrated `allsight`
-sensor; each render's change from the empty finger is put on a real no-contact frame (the
-t = 0 frames of the real set, one chosen per sample from its index), through JPEG. Its
+sensor; each render's change from the empty finger (its strength and tint, and a colour
+shift over its footprint, drawn per sample) is put on a real no-contact frame (the t = 0
+frames of the real set, one chosen per sample from its index), through JPEG. Its
 reference is that frame or, half the time, another no-contact frame of the same session
 (the real LEDs' drift between two moments); drift like a real sensor's is added besides (a
-sector of LEDs brightening, a sub-pixel shift and a tiny turn, gain and offset, noise). A small CNN learns contact / no
-contact and the contact's pixel from (frame, reference, difference). No real contact frame
+sector of LEDs brightening, a sub-pixel shift and a tiny turn, gain and offset, noise). A
+small CNN learns contact / no contact and the contact's pixel from (frame, reference,
+difference). No real contact frame
 is used for training. The real frames are then scored by `geltip.evaluate` (the same
 protocol as `geltip evaluate --real`), and the predictions are written so that
 
@@ -46,7 +48,7 @@ try:
     import torch
     import torch.nn as nn
     import torch.nn.functional as F
-    from PIL import Image
+    from PIL import Image, ImageFilter
 except ImportError as e:  # pragma: no cover - depends on the environment
     sys.exit(f"error: this example needs PyTorch and Pillow ({e}); pip install torch pillow")
 
@@ -104,19 +106,29 @@ def reference_of(k, b, sessions, seed):
     return same[(h // 2) % len(same)]
 
 
+def footprint_tint(mask, depth, largest, rng):
+    """(H, W, 3) levels to add over a contact's footprint (`mask`: 255 where the skin is
+    pressed in), softened at its edge: where the skin is pressed, real imprints shift colour
+    by up to ~10 levels a channel either way (blue falls where the render's rises), so each
+    channel draws a shift in +-`largest`, times the press depth up to 1 mm."""
+    pressed = Image.open(mask).convert("L")
+    soft = np.asarray(pressed.filter(ImageFilter.GaussianBlur(2)), np.float32) / 255
+    return soft[..., None] * (rng.uniform(-largest, largest, 3) * min(1.0, depth))
+
+
 # Set by the pool's initializer: each worker's copy of what composing needs.
 _WORK = {}
 
 
-def _init_worker(backgrounds, reference, root, seed):
-    _WORK.update(backgrounds=backgrounds, reference=reference, root=root, seed=seed)
+def _init_worker(backgrounds, reference, root, seed, tint):
+    _WORK.update(backgrounds=backgrounds, reference=reference, root=root, seed=seed, tint=tint)
 
 
 def compose(job):
     """Sample k's training frame at the network's size: its rendered change on its real
     background (or the background alone for an empty sample), through JPEG. Returns
     (frame, background index)."""
-    k, image, empty = job
+    k, image, empty, mask, depth = job
     w = _WORK
     rng = sample_rng(w["seed"], k)
     b = background_of(k, len(w["backgrounds"]), w["seed"])
@@ -126,6 +138,8 @@ def compose(job):
         # The imprint's strength and tint vary (its look is not yet fitted to real ones).
         contrast = rng.uniform(0.7, 1.5) * (1 + rng.uniform(-0.3, 0.3, 3))
         base = base + contrast * (render - w["reference"])
+        if w["tint"] > 0 and mask:
+            base = base + footprint_tint(Path(w["root"]) / mask, depth, w["tint"], rng)
     base = base + rng.normal(0.0, rng.uniform(0.5, 2.5), base.shape)
     rgb = np.clip(np.rint(base), 0, 255).astype(np.uint8)
     rgb = jpeg(rgb, rng.uniform(75, 97))
@@ -138,7 +152,7 @@ def render_set(args, out):
     cmd = [
         geltip_binary(args.geltip), "dataset", "--sensor", args.sensor,
         "--count", str(args.count), "--seed", str(args.seed), "--out", str(root),
-        "--objects", args.objects,
+        "--objects", args.objects, "--masks",
     ]
     print("rendering:", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True)
@@ -196,14 +210,16 @@ def build_training_set(args, out, real):
         contacts = labels["contacts"] if "contacts" in labels else [labels]
         contacts = [c for c in contacts if c.get("pixel") is not None]
         if contacts:
-            jobs.append((k, labels["image"], False))
+            jobs.append((k, labels["image"], False, contacts[0].get("mask", labels.get("mask")),
+                         contacts[0].get("depth_mm") or 0.0))
             pixels.append(contacts[0]["pixel"])
     # Empty samples: a background alone, indices after the rendered ones.
     for e in range(empties):
-        jobs.append((args.count + e, None, True))
+        jobs.append((args.count + e, None, True, None, 0.0))
         pixels.append(None)
     t = time.time()
-    with Pool(args.workers, _init_worker, (backgrounds, reference, str(root), args.seed)) as pool:
+    init = (backgrounds, reference, str(root), args.seed, args.tint)
+    with Pool(args.workers, _init_worker, init) as pool:
         done = pool.map(compose, jobs, chunksize=32)
     print(f"composed {len(done)} training frames on {len(names)} real backgrounds "
           f"in {time.time() - t:.0f} s", flush=True)
@@ -395,6 +411,9 @@ def main():
     ap.add_argument("--epochs", type=int, default=6)
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--lr", type=float, default=3e-3)
+    ap.add_argument("--tint", type=float, default=12.0,
+                    help="largest colour shift (8-bit levels, either sign per channel) put "
+                    "over each rendered contact's footprint (0: none)")
     ap.add_argument("--check-count", type=int, default=400,
                     help="held-out geltip frames the network is scored on besides the real ones "
                     "(0: none)")

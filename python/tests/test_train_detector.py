@@ -55,3 +55,33 @@ def test_the_quick_run_scores_the_real_set_and_its_predictions_agree(tmp_path):
         capture_output=True, text=True, env=env,
     )
     assert bad.returncode != 0 and "nowhere/labels.json: not found" in bad.stderr
+
+
+def test_the_footprint_tint_stays_on_the_footprint_within_its_bound(tmp_path):
+    pytest.importorskip("torch", reason="PyTorch is not installed (pip install torch)")
+    Image = pytest.importorskip("PIL.Image", reason="Pillow is not installed")
+    import numpy as np
+    sys.path.insert(0, str(REPO / "python" / "examples"))
+    try:
+        import train_detector
+    finally:
+        sys.path.pop(0)
+    ys, xs = np.mgrid[0:64, 0:64]
+    disc = ((xs - 20) ** 2 + (ys - 30) ** 2 < 8**2).astype(np.uint8) * 255
+    Image.fromarray(disc).save(tmp_path / "mask.png")
+    shifts = []
+    for k in range(20):
+        t = train_detector.footprint_tint(tmp_path / "mask.png", 2.0, 12.0, np.random.default_rng(k))
+        assert t.shape == (64, 64, 3)
+        # Nothing beyond the softened edge (2 px Gaussian: gone 8 px out), the full shift
+        # at the centre, never past the bound.
+        far = (xs - 20) ** 2 + (ys - 30) ** 2 > 16**2
+        assert np.abs(t[far]).max() < 1e-3
+        assert np.abs(t).max() <= 12.0 + 1e-4
+        shifts.append(t[30, 20])
+    shifts = np.array(shifts)
+    assert (shifts > 1).any() and (shifts < -1).any()  # either sign, per channel
+    # A shallow press shifts in proportion to its depth (0.25 mm: a quarter).
+    full = train_detector.footprint_tint(tmp_path / "mask.png", 2.0, 12.0, np.random.default_rng(3))
+    shallow = train_detector.footprint_tint(tmp_path / "mask.png", 0.25, 12.0, np.random.default_rng(3))
+    assert np.allclose(shallow, full / 4, atol=1e-4)
