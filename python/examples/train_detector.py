@@ -11,9 +11,9 @@ reference is that frame or, half the time, another no-contact frame of the same 
 (the real LEDs' drift between two moments); drift like a real sensor's is added besides (a
 sector of LEDs brightening, a sub-pixel shift and a tiny turn, gain and offset, noise). A
 small CNN learns contact / no contact and the contact's pixel from (frame, reference,
-difference). No real contact frame
-is used for training. The real frames are then scored by `geltip.evaluate` (the same
-protocol as `geltip evaluate --real`), and the predictions are written so that
+difference). No real contact frame is used for training. The real frames are then scored
+by `geltip.evaluate` (the same protocol as `geltip evaluate --real`), and the predictions
+are written so that
 
     geltip evaluate --real ../shared/real/allsight/labels.json --sensor allsight \\
         --predictions runs/sim2real/predictions.jsonl --out runs/sim2real/eval-cli
@@ -135,7 +135,7 @@ def compose(job):
     base = w["backgrounds"][b].astype(np.float32)
     if not empty:
         render = geltip.load_image(str(Path(w["root"]) / image)).astype(np.float32)
-        # The imprint's strength and tint vary (its look is not yet fitted to real ones).
+        # The imprint's strength and tint vary (its look matches real ones only roughly).
         contrast = rng.uniform(0.7, 1.5) * (1 + rng.uniform(-0.3, 0.3, 3))
         base = base + contrast * (render - w["reference"])
         if w["tint"] > 0 and mask:
