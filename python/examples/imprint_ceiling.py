@@ -19,8 +19,9 @@ each imprint. This asks what that score could be at best, from the real frames a
   A render's error in a window is both, so the last columns add the two errors.
 
 Reads the real set (`--real`, labels.json and its frames) and renders the sensor's empty
-finger with the geltip package (`pip install ./python`). Needs NumPy and Pillow. Prints a
-Markdown table (and writes it to --out), then the whole set's figures as one JSON line.
+finger with the geltip package (`pip install ./python`), whose decoder reads the frames as
+`geltip imprint` does. Needs NumPy. Prints a Markdown table (and writes it to --out), then
+the whole set's figures as one JSON line.
 """
 import argparse
 import json
@@ -34,11 +35,6 @@ import numpy as np
 
 import geltip
 
-try:
-    from PIL import Image
-except ImportError as e:  # pragma: no cover - depends on the environment
-    sys.exit(f"error: this example needs Pillow ({e}); pip install pillow")
-
 HALF = 45  # the patch's half side (px): a 40 px window and room to move
 WINDOW = 40
 SHIFT = 8
@@ -46,7 +42,7 @@ NEAREST = 4
 
 
 def load(path):
-    return np.asarray(Image.open(path).convert("RGB")).astype(np.float64)
+    return geltip.load_image(str(path)).astype(np.float64)
 
 
 def blur(a, sigma):
