@@ -430,6 +430,8 @@ def main():
         args.check_count = min(args.check_count, 60)
     if args.check_count < 0:
         sys.exit(f"error: --check-count must be 0 or more, got {args.check_count}")
+    if not args.tint >= 0:
+        sys.exit(f"error: --tint must be 0 or more, got {args.tint}")
     labels = args.real / "labels.json"
     if not labels.is_file():
         sys.exit(f"error: {labels}: not found (the real set; see --real)")
