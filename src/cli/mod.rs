@@ -65,21 +65,24 @@ pub enum Command {
     ///   geltip dataset --merge data/train data/s0 data/s1 data/s2 data/s3
     #[command(verbatim_doc_comment)]
     Dataset(dataset::DatasetArgs),
-    /// Score a contact detector against the exact labels: a predictions file, a program
-    /// reading frames on its stdin, or a built-in localiser, on a dataset or a suite.
+    /// Score a contact detector against the labels: a predictions file, a program reading
+    /// frames on its stdin, or a built-in localiser, on a dataset or a suite (exact labels)
+    /// or a real sensor's labelled frames (pixels, azimuths, regions, "no contact").
     ///
     /// Examples:
     ///   geltip evaluate --dataset data/test --predictions mine.jsonl --out eval/mine
+    ///   geltip evaluate --real real/labels.json --sensor allsight --method change --out eval/real
     ///   geltip evaluate --dataset data/test --detector "python3 detect.py" --out eval/mine
     ///   geltip evaluate --suite paper --sensor paper --method surface --out eval/surface --compare eval/mine
     #[command(verbatim_doc_comment)]
     Evaluate(evaluate::EvaluateArgs),
-    /// Fit a sensor file to a real GelTip's frames: the lens from the image circle, the LEDs,
-    /// ambient light, paint and vignetting from an empty frame, the noise from several, the
-    /// imprint's values from frames with known contacts.
+    /// Fit a sensor file to a real sensor's frames: the lens from the image circle, the LEDs,
+    /// ambient light, paint, vignetting and the camera's colour response from an empty frame,
+    /// the noise from several, the imprint's values from frames with known contacts.
     ///
-    /// Example:
+    /// Examples:
     ///   geltip calibrate --sensor paper --empty empty.png --out calibrated
+    ///   geltip calibrate --sensor allsight --empty s1_ref_frame.jpg --out calibrated
     #[command(verbatim_doc_comment)]
     Calibrate(calibrate::CalibrateArgs),
     /// Fit the imprint's look (the gel's blend, drape, bulge and shading, and the indenter's
