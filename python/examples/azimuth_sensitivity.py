@@ -16,6 +16,7 @@ import json
 import math
 import sys
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 
@@ -24,12 +25,13 @@ SCATTER = (1.0, 2.0, 3.0)
 
 
 def rows_of(path):
-    """The per-frame rows that have an answer and a labelled azimuth about a centre."""
-    rows = []
+    """(group, label, pixel or None) for every frame labelled with an azimuth about a
+    centre; a frame without an answer keeps None (a miss at any turn)."""
     try:
-        lines = open(path, encoding="utf-8").read().splitlines()
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
     except OSError as e:
         sys.exit(f"error: {path}: {e.strerror}")
+    rows = []
     for n, line in enumerate(lines, 1):
         if not line.strip():
             continue
@@ -40,10 +42,8 @@ def rows_of(path):
             sys.exit(f"error: {path}:{n}: not a row of geltip evaluate's per_frame.jsonl")
         if label.get("azimuth_deg") is None or label.get("centre") is None:
             continue
-        if r.get("pixel") is None:
-            rows.append((label.get("group", "all"), label, None))
-            continue
-        rows.append((label.get("group", "all"), label, np.asarray(r["pixel"], float)))
+        pixel = None if r.get("pixel") is None else np.asarray(r["pixel"], float)
+        rows.append((label.get("group", "all"), label, pixel))
     if not rows:
         sys.exit(f"error: {path}: no frame with a labelled azimuth about a centre")
     return rows
