@@ -1,6 +1,6 @@
 """A contact detector trained on geltip's synthetic frames only, scored on a real sensor's.
 
-    python python/examples/train_detector.py                      # the full run (about 11 min on 2 cores)
+    python python/examples/train_detector.py                      # the full run (about 20 min on 2 cores)
     python python/examples/train_detector.py --quick --out runs/q  # a smoke run (a few minutes)
 
 The sim-to-real check: `geltip dataset` renders contacts on the calibrated `allsight`
@@ -11,7 +11,8 @@ reference is that frame or, half the time, another no-contact frame of the same 
 (the real LEDs' drift between two moments); drift like a real sensor's is added besides (a
 sector of LEDs brightening, a sub-pixel shift and a tiny turn, gain and offset, noise). A
 small CNN learns contact / no contact and the contact's pixel from (frame, reference,
-difference). No real contact frame is used for training. The real frames are then scored
+difference); --members of them (default 2), each from its own seed on the same frames,
+answer together. No real contact frame is used for training. The real frames are then scored
 by `geltip.evaluate` (the same protocol as `geltip evaluate --real`), and the predictions
 are written so that
 
@@ -20,9 +21,9 @@ are written so that
 
 scores them again from the file. Needs PyTorch and Pillow (`pip install torch pillow`);
 uses a GPU when PyTorch sees one. Writes into --out: the rendered set (synthetic/), the
-model (model.pt), training.json (losses, times), predictions.jsonl and the report (eval/).
+models (model.pt), training.json (losses, times), predictions.jsonl and the report (eval/).
 
-It then scores the network on --check-count held-out geltip frames made the same way
+It then scores the networks on --check-count held-out geltip frames made the same way
 (`geltip dataset --background` over the same real no-contact frames, another seed, drift,
 a quarter empty): its error where the truth is exact (eval-synthetic/), beside the real
 frames' (eval/); the difference is the sim-to-real gap.
@@ -320,12 +321,18 @@ def heat_target(px, shape, sigma=1.0):
     return t / t.sum(1, keepdim=True)
 
 
-def train(args, data, device):
+def member_seed(seed, m):
+    """Member m's training seed (its weights' start, batch order and drift): member 0
+    trains exactly as a lone network of this --seed would."""
+    return seed + 7919 * m
+
+
+def train(args, data, device, seed):
     frames, which, refs, has, px = data
     n = len(frames)
-    gen = torch.Generator(device=device).manual_seed(args.seed)
-    cpu_gen = torch.Generator().manual_seed(args.seed)
-    torch.manual_seed(args.seed)
+    gen = torch.Generator(device=device).manual_seed(seed)
+    cpu_gen = torch.Generator().manual_seed(seed)
+    torch.manual_seed(seed)
     net = ContactNet().to(device)
     opt = torch.optim.AdamW(net.parameters(), lr=args.lr, weight_decay=1e-4)
     steps = args.epochs * math.ceil(n / args.batch)
@@ -368,14 +375,32 @@ def train(args, data, device):
             "seconds": time.time() - t0,
         }
         log.append(row)
-        print(f"epoch {epoch + 1}/{args.epochs}: presence {row['presence_bce']:.3f}, "
+        print(f"seed {seed}, epoch {epoch + 1}/{args.epochs}: presence {row['presence_bce']:.3f}, "
               f"heatmap {row['heatmap_ce']:.3f}, pixel {row['pixel_l1_px']:.1f} px, "
               f"{row['seconds']:.0f} s", flush=True)
     return net, log
 
 
+class Ensemble(nn.Module):
+    """Networks trained alike from different seeds, answering together: the mean of their
+    contact probabilities and of their pixels. Averaging takes out what each one's seed
+    alone decided (its own scatter), not what they all learnt."""
+
+    def __init__(self, nets):
+        super().__init__()
+        self.members = nn.ModuleList(nets)
+
+    def forward(self, frame, reference):
+        probs, pixels = [], []
+        for net in self.members:
+            logit, heat, shape = net(frame, reference)
+            probs.append(torch.sigmoid(logit))
+            pixels.append(soft_argmax(heat, shape))
+        return torch.stack(probs).mean(0), torch.stack(pixels).mean(0)
+
+
 def detector(net, device, threshold):
-    """The trained net as a `geltip.evaluate` detector, remembering each answer."""
+    """The trained ensemble as a `geltip.evaluate` detector, remembering each answer."""
     answers = []
 
     @torch.no_grad()
@@ -383,11 +408,11 @@ def detector(net, device, threshold):
         net.eval()
         f = torch.from_numpy(shrink(image))[None].to(device)
         r = torch.from_numpy(shrink(reference))[None].to(device)
-        logit, heat, shape = net(f, r)
-        p = float(torch.sigmoid(logit)[0])
+        prob, pixel = net(f, r)
+        p = float(prob[0])
         found = []
         if p >= threshold:
-            u, v = soft_argmax(heat, shape)[0].tolist()
+            u, v = pixel[0].tolist()
             found = [{"pixel": [u, v], "confidence": p}]
         answers.append({"sample": len(answers), "detections": found})
         return found
@@ -417,6 +442,9 @@ def main():
     ap.add_argument("--check-count", type=int, default=400,
                     help="held-out geltip frames the network is scored on besides the real ones "
                     "(0: none)")
+    ap.add_argument("--members", type=int, default=2,
+                    help="networks trained from different seeds on the same frames, answering "
+                    "together (each adds a training's time)")
     ap.add_argument("--threshold", type=float, default=0.5,
                     help="presence above which a frame is called a contact")
     ap.add_argument("--seed", type=int, default=1)
@@ -430,6 +458,8 @@ def main():
         args.check_count = min(args.check_count, 60)
     if args.check_count < 0:
         sys.exit(f"error: --check-count must be 0 or more, got {args.check_count}")
+    if args.members < 1:
+        sys.exit(f"error: --members must be 1 or more, got {args.members}")
     if not args.tint >= 0:
         sys.exit(f"error: --tint must be 0 or more, got {args.tint}")
     labels = args.real / "labels.json"
@@ -443,9 +473,15 @@ def main():
     t = time.time()
     data = build_training_set(args, args.out, args.real)
     prepared = time.time() - t
-    net, log = train(args, data, device)
+    nets, logs = [], []
+    for m in range(args.members):
+        seed = member_seed(args.seed, m)
+        net, log = train(args, data, device, seed)
+        nets.append(net)
+        logs.append({"seed": seed, "epochs": log})
+    net = Ensemble(nets)
     trained = time.time() - t - prepared
-    torch.save(net.state_dict(), args.out / "model.pt")
+    torch.save({"members": [n.state_dict() for n in nets]}, args.out / "model.pt")
 
     detect, answers = detector(net, device, args.threshold)
     t = time.time()
@@ -456,7 +492,7 @@ def main():
             f.write(json.dumps(a) + "\n")
     check = synthetic_check(args, args.out, args.real, net, device) if args.check_count else None
     (args.out / "training.json").write_text(json.dumps({
-        "device": where, "samples": len(data[0]), "epochs": log,
+        "device": where, "samples": len(data[0]), "members": logs,
         "prepare_s": prepared, "train_s": trained, "score_s": scored,
         "synthetic_check": check and {
             k: check.summary.get(k) for k in (

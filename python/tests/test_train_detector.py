@@ -30,7 +30,13 @@ def test_the_quick_run_scores_the_real_set_and_its_predictions_agree(tmp_path):
     )
     assert run.returncode == 0, run.stderr[-2000:]
     training = json.loads((out / "training.json").read_text())
-    assert len(training["epochs"]) == 2 and training["samples"] > 400
+    assert training["samples"] > 400
+    # Two networks (the default ensemble), each from its own seed, two epochs each.
+    members = training["members"]
+    assert [m["seed"] for m in members] == [1, 1 + 7919]
+    assert all(len(m["epochs"]) == 2 for m in members)
+    bce = lambda m: [e["presence_bce"] for e in m["epochs"]]  # noqa: E731
+    assert bce(members[0]) != bce(members[1])
     lines = (out / "predictions.jsonl").read_text().splitlines()
     assert [json.loads(l)["sample"] for l in lines] == list(range(600))
     # The held-out geltip frames (60 in a quick run, a quarter empty) scored besides.
@@ -55,6 +61,12 @@ def test_the_quick_run_scores_the_real_set_and_its_predictions_agree(tmp_path):
         capture_output=True, text=True, env=env,
     )
     assert bad.returncode != 0 and "nowhere/labels.json: not found" in bad.stderr
+    bad = subprocess.run(
+        [sys.executable, str(REPO / "python" / "examples" / "train_detector.py"),
+         "--members", "0", "--out", str(out)],
+        capture_output=True, text=True, env=env,
+    )
+    assert bad.returncode != 0 and "--members must be 1 or more, got 0" in bad.stderr
 
 
 def test_the_footprint_tint_stays_on_the_footprint_within_its_bound(tmp_path):
@@ -85,3 +97,32 @@ def test_the_footprint_tint_stays_on_the_footprint_within_its_bound(tmp_path):
     full = train_detector.footprint_tint(tmp_path / "mask.png", 2.0, 12.0, np.random.default_rng(3))
     shallow = train_detector.footprint_tint(tmp_path / "mask.png", 0.25, 12.0, np.random.default_rng(3))
     assert np.allclose(shallow, full / 4, atol=1e-4)
+
+
+def test_the_ensemble_answers_with_its_members_mean():
+    torch = pytest.importorskip("torch", reason="PyTorch is not installed (pip install torch)")
+    pytest.importorskip("PIL", reason="Pillow is not installed")
+    sys.path.insert(0, str(REPO / "python" / "examples"))
+    try:
+        import train_detector as td
+    finally:
+        sys.path.pop(0)
+    nets = []
+    for seed in (3, 4):
+        torch.manual_seed(seed)
+        nets.append(td.ContactNet().eval())
+    g = torch.Generator().manual_seed(0)
+    frame, reference = torch.rand(2, 3, 120, 120, generator=g), torch.rand(2, 3, 120, 120, generator=g)
+    with torch.no_grad():
+        prob, pixel = td.Ensemble(nets).eval()(frame, reference)
+        each = [n(frame, reference) for n in nets]
+    probs = [torch.sigmoid(logit) for logit, _, _ in each]
+    pixels = [td.soft_argmax(heat, shape) for _, heat, shape in each]
+    assert torch.allclose(prob, (probs[0] + probs[1]) / 2)
+    assert torch.allclose(pixel, (pixels[0] + pixels[1]) / 2)
+    # Untrained members from different seeds disagree, so the mean is neither one's answer.
+    assert not torch.allclose(pixel, pixels[0], atol=1e-3)
+    # One member is that member.
+    with torch.no_grad():
+        alone, where = td.Ensemble(nets[:1]).eval()(frame, reference)
+    assert torch.allclose(alone, probs[0]) and torch.allclose(where, pixels[0])
