@@ -1,6 +1,6 @@
 """A contact detector trained on geltip's synthetic frames only, scored on a real sensor's.
 
-    python python/examples/train_detector.py                      # the full run (about 20 min on 2 cores)
+    python python/examples/train_detector.py                      # the full run (about 20-25 min on 2 cores)
     python python/examples/train_detector.py --quick --out runs/q  # a smoke run (a few minutes)
 
 The sim-to-real check: `geltip dataset` renders contacts on the calibrated `allsight`
