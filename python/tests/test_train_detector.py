@@ -15,6 +15,16 @@ from conftest import REPO, _find_cli
 REAL = REPO / ".." / "shared" / "real" / "allsight"
 
 
+def _example():
+    """python/examples/train_detector.py as a module."""
+    sys.path.insert(0, str(REPO / "python" / "examples"))
+    try:
+        import train_detector
+    finally:
+        sys.path.pop(0)
+    return train_detector
+
+
 def test_the_quick_run_scores_the_real_set_and_its_predictions_agree(tmp_path):
     pytest.importorskip("torch", reason="PyTorch is not installed (pip install torch)")
     pytest.importorskip("PIL", reason="Pillow is not installed")
@@ -73,11 +83,7 @@ def test_the_footprint_tint_stays_on_the_footprint_within_its_bound(tmp_path):
     pytest.importorskip("torch", reason="PyTorch is not installed (pip install torch)")
     Image = pytest.importorskip("PIL.Image", reason="Pillow is not installed")
     import numpy as np
-    sys.path.insert(0, str(REPO / "python" / "examples"))
-    try:
-        import train_detector
-    finally:
-        sys.path.pop(0)
+    train_detector = _example()
     ys, xs = np.mgrid[0:64, 0:64]
     disc = ((xs - 20) ** 2 + (ys - 30) ** 2 < 8**2).astype(np.uint8) * 255
     Image.fromarray(disc).save(tmp_path / "mask.png")
@@ -102,11 +108,7 @@ def test_the_footprint_tint_stays_on_the_footprint_within_its_bound(tmp_path):
 def test_the_ensemble_answers_with_its_members_mean():
     torch = pytest.importorskip("torch", reason="PyTorch is not installed (pip install torch)")
     pytest.importorskip("PIL", reason="Pillow is not installed")
-    sys.path.insert(0, str(REPO / "python" / "examples"))
-    try:
-        import train_detector as td
-    finally:
-        sys.path.pop(0)
+    td = _example()
     nets = []
     for seed in (3, 4):
         torch.manual_seed(seed)
