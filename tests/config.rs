@@ -238,6 +238,10 @@ fn listed_leds_light_paint_colour_and_channel_noise_are_refused_by_field() {
         ),
         ("[light]\nvignetting = [-1.5, 0.0]\n", "light.vignetting"),
         ("[light]\nambient = [0.1, 0.1, nan]\n", "light.ambient[2]"),
+        (
+            "[light]\nambient_relief = [1.0, inf, 0.0]\n",
+            "light.ambient_relief[1]",
+        ),
         ("[paint]\ncolour = [1.0, 1.0, -1.0]\n", "paint.colour[2]"),
         ("[render]\nnoise = [1.0, -2.0, 0.0]\n", "render.noise[1]"),
         ("[render]\nnoise = \"loud\"\n", "render.noise"),
@@ -425,4 +429,23 @@ fn an_image_circle_mask_loads_round_trips_and_is_refused_by_field() {
         bad.image.circle = Some(circle);
         assert_refused(bad, field);
     }
+}
+
+/// `light.ambient_relief` loads, writes back and round-trips; left out it is flat and not
+/// written, so a file without it is the same file.
+#[test]
+fn an_ambient_that_shades_with_tilt_round_trips_and_is_left_out_when_flat() {
+    let flat = Sensor::from_toml("flat", &paper_toml()).unwrap();
+    assert_eq!(flat.config.light.ambient_relief, [0.0; 3]);
+    assert!(!toml::to_string(&flat.config)
+        .unwrap()
+        .contains("ambient_relief"));
+    let text =
+        paper_toml() + "\n[light]\nambient = [0.1, 0.1, 0.1]\nambient_relief = [1.5, -0.5, 0.0]\n";
+    let s = Sensor::from_toml("tilted", &text).unwrap();
+    assert_eq!(s.config.light.ambient_relief, [1.5, -0.5, 0.0]);
+    let written = toml::to_string(&s.config).unwrap();
+    assert!(written.contains("ambient_relief"), "{written}");
+    let back = Sensor::from_toml("back", &written).unwrap();
+    assert_eq!(back.config, s.config);
 }

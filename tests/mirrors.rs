@@ -243,6 +243,66 @@ fn gpu_matches_the_cpu_pipeline_under_gel_light_and_a_camera_response() {
     )));
 }
 
+/// Ambient light that shades with the skin's tilt (`light.ambient_relief`): the shaders'
+/// ambient_light against the CPU mirror, on the reference and four contacts; the empty
+/// finger (no tilt) keeps its light, an imprint's flanks change with the term and with its
+/// channel.
+#[test]
+fn gpu_matches_the_cpu_pipeline_under_an_ambient_that_shades_with_tilt() {
+    use geltip::sensor::{LedConfig, Leds};
+    let mut c = small_sensor().config.clone();
+    c.leds = Leds::List(
+        (0..6)
+            .map(|i| LedConfig {
+                z_mm: 0.5,
+                ..LedConfig::gel(
+                    [[1.0, 0.2, 0.1], [0.1, 1.0, 0.2], [0.2, 0.3, 1.0]][i % 3],
+                    60.0 * i as f64,
+                )
+            })
+            .collect(),
+    );
+    c.light.ambient = Some([0.3, 0.2, 0.25]);
+    let flat = Sensor::from_config("small-flat-ambient", c.clone()).unwrap();
+    c.light.ambient_relief = [2.0, -1.5, 0.0];
+    let sensor = Sensor::from_config("small-ambient-relief", c.clone()).unwrap();
+    let grid = render::HeightfieldGrid::for_sensor(&sensor);
+    let constants = render::uniforms::SensorUniform::new(&sensor, &grid).pipeline_constants();
+    assert!(constants.contains(&("AMBIENT_RELIEF", 1.0)));
+    let flat_grid = render::HeightfieldGrid::for_sensor(&flat);
+    assert!(render::uniforms::SensorUniform::new(&flat, &flat_grid)
+        .pipeline_constants()
+        .contains(&("AMBIENT_RELIEF", 0.0)));
+    gpu_matches_cpu(&sensor);
+    // Untilted skin keeps the flat ambient's light; a pressed flank does not, and only in
+    // the channels the term is given.
+    let reference = |s: &Sensor| rgb(&cpu::render(s, None).unwrap().frame);
+    assert!(close_enough(&diff(
+        &reference(&sensor),
+        &reference(&flat),
+        1
+    )));
+    let press = contact(Solid::Sphere, Place::Rotation(60.0), 1.0);
+    let pressed = rgb(&cpu::render(&sensor, Some(&press)).unwrap().frame);
+    let flat_pressed = rgb(&cpu::render(&flat, Some(&press)).unwrap().frame);
+    assert!(!close_enough(&diff(&pressed, &flat_pressed, 3)));
+    let most = |k: usize| {
+        pressed
+            .chunks(3)
+            .zip(flat_pressed.chunks(3))
+            .map(|(a, b)| a[k].abs_diff(b[k]))
+            .max()
+            .unwrap()
+    };
+    assert!(
+        most(0) >= 4 && most(1) >= 4,
+        "red {} green {}",
+        most(0),
+        most(1)
+    );
+    assert!(most(2) <= 1, "blue {}", most(2));
+}
+
 /// A clear shell ending below the tip (`[shell_end]`) over gel light: the shaders'
 /// shell_end_light against the CPU mirror, on the reference and four contacts; the term
 /// darkens the tip it is given and leaves a sensor without one as it was.

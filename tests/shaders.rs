@@ -515,6 +515,7 @@ fn uniform_structs_equal_the_shaders() {
         member!(S, image_circle),
         member!(S, shell_end),
         member!(S, shell_tip),
+        member!(S, ambient_relief),
         member!(S, blend_weights),
     ];
     let frame = vec![

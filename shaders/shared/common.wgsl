@@ -74,6 +74,9 @@ struct Sensor {
     // (xyz) and the share of the LEDs' reaching it (w).
     shell_end: vec4<f32>,
     shell_tip: vec4<f32>,
+    // How the ambient light shades with the skin's tilt, per channel (xyz; read when
+    // AMBIENT_RELIEF).
+    ambient_relief: vec4<f32>,
     // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
     blend_weights: array<vec4<f32>, 65>,
 }
@@ -165,6 +168,8 @@ override CAMERA_RESPONSE: bool = false;
 // shell_end_light), and how sharp its edge is (mm; src/sensor/shell_end.rs SHELL_EDGE_MM).
 override SHELL_END: bool = false;
 override SHELL_EDGE_MM: f32 = 0.08;
+// Whether the ambient light shades with the skin's tilt (shared/shading.wgsl ambient_light).
+override AMBIENT_RELIEF: bool = false;
 
 const GRID_OBJECT: u32 = 100u;
 // object_kind of the reference frame (no object; every pixel is shaded).

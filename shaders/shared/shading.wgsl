@@ -40,6 +40,9 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
     let facing = -normal;
     let view = -ray;
     var colour = sensor.ambient.xyz;
+    if AMBIENT_RELIEF {
+        colour = ambient_light(p, normal);
+    }
     for (var i = 0; i < LED_COUNT; i++) {
         if GEL_LEDS && sensor.led_position[i].w == 1.0 {
             colour += sensor.led_colour[i].xyz * (sensor.led_light[i].x * gel_light(i, p, normal));
@@ -62,6 +65,19 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
         colour = shell_end_light(colour, ray);
     }
     return colour * sensor.paint_colour.xyz;
+}
+
+// The ambient light at p (normal `normal`): each channel times the skin's tilt against the
+// way up the finger, as a gel LED's glow. Mirror: src/render/leds.rs ambient_light.
+fn ambient_light(p: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
+    var way_up = vec3<f32>(0.0, 0.0, 1.0);
+    if p.z > sensor.cylinder_length {
+        let latitude = atan2(p.z - sensor.cylinder_length, length(p.xy));
+        let azimuth = atan2(p.y, p.x);
+        way_up = vec3<f32>(-sin(latitude) * cos(azimuth), -sin(latitude) * sin(azimuth), cos(latitude));
+    }
+    let tilt = dot(normal, way_up);
+    return sensor.ambient.xyz * max(vec3<f32>(1.0) + sensor.ambient_relief.xyz * tilt, vec3<f32>(0.0));
 }
 
 // The light `colour` of the skin a camera ray sees, past a clear shell's open end: through

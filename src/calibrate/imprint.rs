@@ -272,7 +272,7 @@ fn look_values(config: &SensorConfig) -> Vec<LookValue> {
             step: 0.02,
         }
     };
-    vec![
+    let mut values = vec![
         LookValue {
             name: "indenter.radius_mm",
             lo: RADIUS_MM.0,
@@ -298,8 +298,25 @@ fn look_values(config: &SensorConfig) -> Vec<LookValue> {
             step: 0.05,
         },
         tilt,
-    ]
+    ];
+    if has_gel(config) {
+        // Light carried in the gel shades the imprint's flanks; the ambient light may be
+        // carried there too, each channel as far as the real imprints show.
+        values.extend(AMBIENT_RELIEF.map(|name| LookValue {
+            name,
+            lo: -10.0,
+            hi: 10.0,
+            step: 0.05,
+        }));
+    }
+    values
 }
+
+const AMBIENT_RELIEF: [&str; 3] = [
+    "light.ambient_relief[0]",
+    "light.ambient_relief[1]",
+    "light.ambient_relief[2]",
+];
 
 /// The look's values in `config` ([`look_values`]' order), the radius first.
 fn get_look(config: &SensorConfig, radius: f64) -> Vec<f64> {
@@ -311,13 +328,17 @@ fn get_look(config: &SensorConfig, radius: f64) -> Vec<f64> {
             .unwrap_or(1.0),
         _ => config.paint.specular,
     };
-    vec![
+    let mut values = vec![
         radius,
         config.elastomer.blend_mm,
         config.elastomer.drape_mm,
         config.elastomer.bulge,
         tilt,
-    ]
+    ];
+    if has_gel(config) {
+        values.extend(config.light.ambient_relief);
+    }
+    values
 }
 
 /// The look's values in `config` with an indenter of `radius` mm, named as the fit names them.
@@ -343,6 +364,9 @@ fn set_look(config: &SensorConfig, p: &[f64]) -> SensorConfig {
             }
         }
         _ => c.paint.specular = p[4],
+    }
+    if gel {
+        c.light.ambient_relief = [p[5], p[6], p[7]];
     }
     c
 }

@@ -519,6 +519,7 @@ impl Model {
             lighting: Lighting {
                 leds,
                 ambient: DVec3::new(p[a], p[a + 1], p[a + 2]),
+                ambient_relief: DVec3::from_array(self.start.config.light.ambient_relief),
                 paint_colour: DVec3::ONE,
                 vignetting: [p[v], p[v + 1]],
                 finger,

@@ -14,26 +14,37 @@ use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Squared errors summed over a window's values, and how many values.
+/// Squared errors summed over a window's pixels, per channel (R, G, B), and how many pixels.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Squares {
-    pub sum: f64,
+    pub sum: [f64; 3],
     pub count: usize,
 }
 
 impl Squares {
     fn add(&mut self, other: Squares) {
-        self.sum += other.sum;
+        for (s, o) in self.sum.iter_mut().zip(other.sum) {
+            *s += o;
+        }
         self.count += other.count;
     }
 
-    /// PSNR (dB) of the pooled mean square; infinite for none.
+    /// PSNR (dB) of the mean square pooled over the three channels; infinite for none.
     pub fn psnr_db(&self) -> f64 {
-        if self.count == 0 || self.sum == 0.0 {
-            return f64::INFINITY;
-        }
-        10.0 * (255.0f64 * 255.0 / (self.sum / self.count as f64)).log10()
+        psnr(self.sum.iter().sum(), 3 * self.count)
     }
+
+    /// PSNR (dB) of each channel alone: which colour a look misses.
+    pub fn channel_psnr_db(&self) -> [f64; 3] {
+        self.sum.map(|s| psnr(s, self.count))
+    }
+}
+
+fn psnr(sum: f64, count: usize) -> f64 {
+    if count == 0 || sum == 0.0 {
+        return f64::INFINITY;
+    }
+    10.0 * (255.0f64 * 255.0 / (sum / count as f64)).log10()
 }
 
 /// How one look matches a frame inside its window: the render, and the real reference with
@@ -229,14 +240,15 @@ struct Tile {
 }
 
 fn squares(a: &[u8], b: &[u8], window: &[usize]) -> Squares {
-    let sum = window
-        .iter()
-        .flat_map(|&i| (0..3).map(move |c| i * 3 + c))
-        .map(|k| (a[k] as f64 - b[k] as f64).powi(2))
-        .sum();
+    let mut sum = [0.0; 3];
+    for &i in window {
+        for (c, s) in sum.iter_mut().enumerate() {
+            *s += (a[i * 3 + c] as f64 - b[i * 3 + c] as f64).powi(2);
+        }
+    }
     Squares {
         sum,
-        count: window.len() * 3,
+        count: window.len(),
     }
 }
 
@@ -325,12 +337,15 @@ fn report_json(
     seconds: f64,
 ) -> Value {
     let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    let rgb = |q: &Squares| q.channel_psnr_db().map(finite).to_vec();
     let placed =
         |p: &Placed| json!({"s_mm": p.s_mm, "azimuth_deg": p.azimuth_deg, "depth_mm": p.depth_mm});
     let matched = |m: &Match| {
         json!({
             "render_psnr_db": finite(m.render.psnr_db()),
             "composite_psnr_db": finite(m.composite.psnr_db()),
+            "render_psnr_db_rgb": rgb(&m.render),
+            "composite_psnr_db_rgb": rgb(&m.composite),
         })
     };
     json!({
@@ -362,6 +377,7 @@ fn report_json(
             "before": matched(&r.before),
             "after": matched(&r.after),
             "unchanged_psnr_db": finite(r.unchanged.psnr_db()),
+            "unchanged_psnr_db_rgb": rgb(&r.unchanged),
         })).collect::<Vec<_>>(),
         "scored_frames": scored.iter().map(|s| json!({
             "image": located[s.located].image,
@@ -370,6 +386,7 @@ fn report_json(
             "before": {"contact": placed(&s.before.0), "match": matched(&s.before.1)},
             "after": {"contact": placed(&s.after.0), "match": matched(&s.after.1)},
             "unchanged_psnr_db": finite(s.unchanged.psnr_db()),
+            "unchanged_psnr_db_rgb": rgb(&s.unchanged),
         })).collect::<Vec<_>>(),
         "seconds": seconds,
     })
@@ -395,6 +412,27 @@ pub fn table(rows: &[Row]) -> String {
     s
 }
 
+/// The fitted look's rows channel by channel (R / G / B): which colour the look misses.
+pub fn channel_table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| group | render, fitted (R / G / B) | composite, fitted (R / G / B) | no imprint (R / G / B) |\n|---|---|---|---|\n",
+    );
+    let rgb = |q: &Squares| {
+        let [r, g, b] = q.channel_psnr_db();
+        format!("{r:.1} / {g:.1} / {b:.1}")
+    };
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} |\n",
+            r.group,
+            rgb(&r.after.render),
+            rgb(&r.after.composite),
+            rgb(&r.unchanged)
+        ));
+    }
+    s
+}
+
 /// Writes `out`/sensor.toml, report.json, tables.md and imprints.png, each whole or not at all.
 pub fn write(judged: &Judged, out: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
@@ -406,10 +444,64 @@ pub fn write(judged: &Judged, out: &Path) -> Result<Vec<PathBuf>> {
     output::write_png_rgb8(&path, p.width(), p.height(), p.as_raw())?;
     files.push(path);
     let path = out.join("tables.md");
-    output::write_atomic(&path, table(&judged.rows).as_bytes())?;
+    let tables = format!(
+        "{}\nBy channel (PSNR in dB of each channel alone):\n\n{}",
+        table(&judged.rows),
+        channel_table(&judged.rows)
+    );
+    output::write_atomic(&path, tables.as_bytes())?;
     files.push(path);
     let path = out.join("report.json");
     output::write_json(&path, &judged.report)?;
     files.push(path);
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn squares_split_by_channel_and_pool_to_the_mean_square() {
+        // Two pixels, the second off by 10 levels in red and 5 in blue; the first not in the
+        // window.
+        let a = [9, 9, 9, 100, 50, 20];
+        let b = [0, 0, 0, 90, 50, 25];
+        let q = squares(&a, &b, &[1]);
+        assert_eq!(q.sum, [100.0, 0.0, 25.0]);
+        assert_eq!(q.count, 1);
+        let [r, g, bl] = q.channel_psnr_db();
+        assert!((r - 10.0 * (65025.0f64 / 100.0).log10()).abs() < 1e-12);
+        assert!(g.is_infinite());
+        assert!((bl - 10.0 * (65025.0f64 / 25.0).log10()).abs() < 1e-12);
+        // Pooled: the mean over the three channels' values.
+        assert!((q.psnr_db() - 10.0 * (65025.0f64 / (125.0 / 3.0)).log10()).abs() < 1e-12);
+        let mut both = q;
+        both.add(squares(&a, &b, &[0]));
+        assert_eq!(both.sum, [181.0, 81.0, 106.0]);
+        assert_eq!(both.count, 2);
+        assert!(Squares::default().psnr_db().is_infinite());
+    }
+
+    #[test]
+    fn the_channel_table_names_each_group_and_its_three_channels() {
+        let m = |s: [f64; 3]| Squares { sum: s, count: 1 };
+        let row = Row {
+            group: "s1 push 2".into(),
+            frames: 1,
+            before: Match::default(),
+            after: Match {
+                render: m([650.25, 65.025, 6.5025]),
+                composite: m([65.025, 65.025, 65.025]),
+            },
+            unchanged: m([6502.5, 650.25, 65.025]),
+        };
+        let t = channel_table(&[row]);
+        assert!(
+            t.contains(
+                "| s1 push 2 | 20.0 / 30.0 / 40.0 | 30.0 / 30.0 / 30.0 | 10.0 / 20.0 / 30.0 |"
+            ),
+            "{t}"
+        );
+    }
 }

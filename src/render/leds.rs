@@ -24,13 +24,13 @@ pub fn emission(towards: DVec3, spread: f64) -> f64 {
 /// Linear radiance reaching the camera from a skin point, under the sensor's light resolved
 /// once ([`Sensor::lighting`]) for every pixel shaded.
 pub fn shade(light: &Lighting, paint: &PaintConfig, hit: &SkinHit) -> DVec3 {
-    let gel = light
-        .has_gel_leds()
+    let gel = (light.has_gel_leds() || light.has_ambient_relief())
         .then(|| GelPlace::of(&light.finger, hit.point, hit.normal));
     shade_at(light, paint, hit, gel.as_ref())
 }
 
-/// [`shade`] with the hit's [`GelPlace`] already known (`None` when no LED is a gel LED).
+/// [`shade`] with the hit's [`GelPlace`] already known (`None` when no LED is a gel LED and
+/// the ambient light is flat).
 pub fn shade_at(
     light: &Lighting,
     paint: &PaintConfig,
@@ -40,7 +40,12 @@ pub fn shade_at(
     // The paint faces the inside of the finger, where the camera and the LEDs are.
     let facing = -hit.normal;
     let view = -hit.ray;
-    let mut colour = light.ambient;
+    let mut colour = match gel {
+        Some(place) if light.has_ambient_relief() => {
+            ambient_light(light.ambient, light.ambient_relief, place)
+        }
+        _ => light.ambient,
+    };
     for led in &light.leds {
         if let (LedKind::Gel(band), Some(place)) = (led.kind, gel) {
             let azimuth = led.position.y.atan2(led.position.x);
@@ -144,6 +149,12 @@ pub fn gel_light(
     let g = across / width;
     let glow = (-0.5 * g * g - up / band.attenuation_mm).exp() * (band.width_mm / width);
     glow * (1.0 + band.relief * place.tilt_up).max(0.0)
+}
+
+/// The ambient light at `place`: each channel times max(0, 1 + relief n.t), as a gel LED's
+/// glow ([`gel_light`]), so a skin tilted against the way up the finger brightens or darkens.
+pub fn ambient_light(ambient: DVec3, relief: DVec3, place: &GelPlace) -> DVec3 {
+    ambient * (DVec3::ONE + relief * place.tilt_up).max(DVec3::ZERO)
 }
 
 /// The vignetting gain at `pixel`: [`Lighting::vignette`] at its distance from the principal

@@ -75,6 +75,9 @@ pub struct SensorUniform {
     /// own light (xyz) and tip_transmit (w). Zero without one.
     pub shell_end: [f32; 4],
     pub shell_tip: [f32; 4],
+    /// How the ambient light shades with the skin's tilt, per channel (xyz; w unused; the
+    /// pipeline constant AMBIENT_RELIEF says whether it does).
+    pub ambient_relief: [f32; 4],
     /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
     /// [`super::elastomer::blend_weights`].
     pub blend_weights: [[f32; 4]; BLEND_WEIGHTS],
@@ -84,7 +87,7 @@ pub struct SensorUniform {
 pub const BLEND_WEIGHTS: usize = super::elastomer::MAX_BLEND_TAPS as usize + 1;
 
 const _: () =
-    assert!(std::mem::size_of::<SensorUniform>() == 320 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
+    assert!(std::mem::size_of::<SensorUniform>() == 336 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -253,6 +256,7 @@ impl SensorUniform {
                 let [r, g, b] = e.tip_colour.map(|c| c as f32);
                 [r, g, b, e.tip_transmit as f32]
             }),
+            ambient_relief: vec4(light.ambient_relief, 0.0),
             blend_weights,
         }
     }
@@ -260,7 +264,7 @@ impl SensorUniform {
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
     /// fields that shape control flow, and the shading's exponents, fixed per sensor so the
     /// driver can fold the lens switch, unroll the loops and multiply whole powers out.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 13] {
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 14] {
         // Nested exactly as the shader steps them: the wide step twice the narrow one in f32.
         let nested = self.wide_step_mm == 2.0 * self.narrow_step_mm;
         [
@@ -284,6 +288,14 @@ impl SensorUniform {
             ("CAMERA_RESPONSE", self.camera_response as f64),
             ("SHELL_END", self.has_shell_end as f64),
             ("SHELL_EDGE_MM", crate::sensor::shell_end::SHELL_EDGE_MM),
+            (
+                "AMBIENT_RELIEF",
+                if self.ambient_relief[..3] == [0.0; 3] {
+                    0.0
+                } else {
+                    1.0
+                },
+            ),
         ]
     }
 }

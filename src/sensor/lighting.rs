@@ -255,6 +255,16 @@ pub struct LightConfig {
     /// The camera's vignetting: every pixel's light is multiplied by 1 + a x^2 + b x^4, x its
     /// distance from the principal point over the lens's image-circle radius.
     pub vignetting: [f64; 2],
+    /// How the ambient light shades with the skin's tilt, per channel (R, G, B): each is
+    /// multiplied by max(0, 1 + k n.t), n the skin's normal and t the way up the finger, as a
+    /// gel LED's light is by its `relief` (in a sensor lit through its gel the ambient light
+    /// is carried in the gel too). 0, the default, leaves it flat.
+    #[serde(skip_serializing_if = "is_flat")]
+    pub ambient_relief: [f64; 3],
+}
+
+fn is_flat(k: &[f64; 3]) -> bool {
+    *k == [0.0; 3]
 }
 
 /// `render.noise`: one standard deviation for every channel, or one per channel (R, G, B), in
@@ -318,6 +328,9 @@ pub struct Led {
 pub struct Lighting {
     pub leds: Vec<Led>,
     pub ambient: DVec3,
+    /// Per channel, how the ambient light shades with the skin's tilt
+    /// ([`LightConfig::ambient_relief`]).
+    pub ambient_relief: DVec3,
     /// The paint's colour (linear RGB albedo, multiplying all reflected light).
     pub paint_colour: DVec3,
     /// 1 + a x^2 + b x^4 (see [`LightConfig::vignetting`]).
@@ -401,6 +414,14 @@ impl Lighting {
     /// [`GelPlace`]: crate::render::leds::GelPlace
     pub fn has_gel_leds(&self) -> bool {
         self.leds.iter().any(|l| matches!(l.kind, LedKind::Gel(_)))
+    }
+
+    /// Whether the ambient light shades with the skin's tilt (shading then needs each skin
+    /// point's [`GelPlace`] too).
+    ///
+    /// [`GelPlace`]: crate::render::leds::GelPlace
+    pub fn has_ambient_relief(&self) -> bool {
+        self.ambient_relief != DVec3::ZERO
     }
 
     /// The spread every LED shares, if they share one.
@@ -529,6 +550,9 @@ impl LightConfig {
         }
         for (k, v) in self.vignetting.iter().enumerate() {
             finite(&format!("light.vignetting[{k}]"), *v)?;
+        }
+        for (k, v) in self.ambient_relief.iter().enumerate() {
+            finite(&format!("light.ambient_relief[{k}]"), *v)?;
         }
         // The gain must stay positive across the image circle: at its lowest (x = 1 or the
         // quartic's turning point) it decides whether a ring of pixels turns black or negative.

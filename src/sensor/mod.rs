@@ -162,6 +162,7 @@ impl Sensor {
                 .leds
                 .resolve(c.finger.radius_mm, c.finger.shell_thickness_mm),
             ambient,
+            ambient_relief: DVec3::from_array(c.light.ambient_relief),
             paint_colour: DVec3::from_array(c.paint.colour),
             vignetting: c.light.vignetting,
             finger: self.finger,
