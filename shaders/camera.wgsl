@@ -147,7 +147,7 @@ fn camera(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) g
     }
     let dir = ray.xyz;
     let point = capsule_hit(dir, 0.0) * dir;
-    write_pixel(vec2<u32>(x, y), shade(point, normal_of_point(point), dir), 0.0);
+    write_pixel(vec2<u32>(x, y), shade(point, normal_of_point(point), dir, false), 0.0);
     let p = ray_probes(dir);
     probes[PROBES_STRIDE * i] = vec4<f32>(p.a, p.b);
     probes[PROBES_STRIDE * i + 1u] = vec4<f32>(p.c, p.t_in, p.t_out);
@@ -158,7 +158,7 @@ fn write_hit(xy: vec2<u32>, hit: SkinHit) {
         write_pixel(xy, vec3<f32>(0.0), 0.0);
         return;
     }
-    write_pixel(xy, shade(hit.point, hit.normal, hit.ray), hit.indentation);
+    write_pixel(xy, shade(hit.point, hit.normal, hit.ray, hit.indentation != 0.0), hit.indentation);
 }
 
 // A contact frame, second pass: one invocation per shallow pixel, cast and shaded at once

@@ -35,12 +35,13 @@ fn emission(i: i32, towards: vec3<f32>) -> f32 {
     return power(max(towards.z, 0.0), spread);
 }
 
-fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
+fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>, moved: bool) -> vec3<f32> {
     // The paint faces the inside of the finger, where the camera and the LEDs are.
     let facing = -normal;
     let view = -ray;
     var colour = sensor.ambient.xyz;
-    if AMBIENT_RELIEF {
+    // Only moved skin is tilted: the empty finger keeps the flat ambient's exact light.
+    if AMBIENT_RELIEF && moved {
         colour = ambient_light(p, normal);
     }
     for (var i = 0; i < LED_COUNT; i++) {

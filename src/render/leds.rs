@@ -40,8 +40,9 @@ pub fn shade_at(
     // The paint faces the inside of the finger, where the camera and the LEDs are.
     let facing = -hit.normal;
     let view = -hit.ray;
+    // Only moved skin is tilted: the empty finger keeps the flat ambient's exact light.
     let mut colour = match gel {
-        Some(place) if light.has_ambient_relief() => {
+        Some(place) if light.has_ambient_relief() && hit.indentation != 0.0 => {
             ambient_light(light.ambient, light.ambient_relief, place)
         }
         _ => light.ambient,
