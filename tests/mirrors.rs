@@ -249,19 +249,8 @@ fn gpu_matches_the_cpu_pipeline_under_gel_light_and_a_camera_response() {
 /// and with its channel.
 #[test]
 fn gpu_matches_the_cpu_pipeline_under_an_ambient_that_shades_with_tilt() {
-    use geltip::sensor::{LedConfig, Leds};
     let mut c = small_sensor().config.clone();
-    c.leds = Leds::List(
-        (0..6)
-            .map(|i| LedConfig {
-                z_mm: 0.5,
-                ..LedConfig::gel(
-                    [[1.0, 0.2, 0.1], [0.1, 1.0, 0.2], [0.2, 0.3, 1.0]][i % 3],
-                    60.0 * i as f64,
-                )
-            })
-            .collect(),
-    );
+    c.leds = geltip::sensor::Leds::List(gel_ring(6, 60.0));
     c.light.ambient = Some([0.3, 0.2, 0.25]);
     let flat = Sensor::from_config("small-flat-ambient", c.clone()).unwrap();
     c.light.ambient_relief = [2.0, -1.5, 0.0];
@@ -309,15 +298,12 @@ fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
     use geltip::sensor::{LedConfig, Leds, ShellEndConfig};
     let mut c = small_sensor().config.clone();
     c.leds = Leds::List(
-        (0..9)
-            .map(|i| LedConfig {
-                z_mm: 0.5,
+        gel_ring(9, 40.0)
+            .into_iter()
+            .map(|l| LedConfig {
                 width_mm: Some(2.0),
                 widening: Some(0.4),
-                ..LedConfig::gel(
-                    [[1.0, 0.2, 0.1], [0.1, 1.0, 0.2], [0.2, 0.3, 1.0]][i % 3],
-                    40.0 * i as f64,
-                )
+                ..l
             })
             .collect(),
     );
@@ -353,6 +339,19 @@ fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
     let ring = sensor.principal + DVec2::new(sensor.lens.max_rho() * 0.98, 0.0);
     let (x, y) = (ring.x.round() as u32, ring.y.round() as u32);
     assert!(level(&with.frame, x, y).abs_diff(level(&without.frame, x, y)) <= 3);
+}
+
+/// `count` gel LEDs `step_deg` apart, 0.5 mm up the finger, red, green and blue in turn.
+fn gel_ring(count: usize, step_deg: f64) -> Vec<geltip::sensor::LedConfig> {
+    (0..count)
+        .map(|i| geltip::sensor::LedConfig {
+            z_mm: 0.5,
+            ..geltip::sensor::LedConfig::gel(
+                [[1.0, 0.2, 0.1], [0.1, 1.0, 0.2], [0.2, 0.3, 1.0]][i % 3],
+                step_deg * i as f64,
+            )
+        })
+        .collect()
 }
 
 fn gpu_matches_cpu(sensor: &Sensor) {
