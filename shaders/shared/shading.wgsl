@@ -40,13 +40,17 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>, moved: bool) -> vec3<f
     let facing = -normal;
     let view = -ray;
     var colour = sensor.ambient.xyz;
+    var place: GelPlace;
+    if GEL_LEDS || AMBIENT_RELIEF {
+        place = gel_place(p, normal);
+    }
     // Only moved skin is tilted: the empty finger keeps the flat ambient's exact light.
     if AMBIENT_RELIEF && moved {
-        colour = ambient_light(p, normal);
+        colour = ambient_light(place);
     }
     for (var i = 0; i < LED_COUNT; i++) {
         if GEL_LEDS && sensor.led_position[i].w == 1.0 {
-            colour += sensor.led_colour[i].xyz * (sensor.led_light[i].x * gel_light(i, p, normal));
+            colour += sensor.led_colour[i].xyz * (sensor.led_light[i].x * gel_light(i, place));
             continue;
         }
         let to_led = sensor.led_position[i].xyz - p;
@@ -68,17 +72,10 @@ fn shade(p: vec3<f32>, normal: vec3<f32>, ray: vec3<f32>, moved: bool) -> vec3<f
     return colour * sensor.paint_colour.xyz;
 }
 
-// The ambient light at p (normal `normal`): each channel times the skin's tilt against the
-// way up the finger, as a gel LED's glow. Mirror: src/render/leds.rs ambient_light.
-fn ambient_light(p: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
-    var way_up = vec3<f32>(0.0, 0.0, 1.0);
-    if p.z > sensor.cylinder_length {
-        let latitude = atan2(p.z - sensor.cylinder_length, length(p.xy));
-        let azimuth = atan2(p.y, p.x);
-        way_up = vec3<f32>(-sin(latitude) * cos(azimuth), -sin(latitude) * sin(azimuth), cos(latitude));
-    }
-    let tilt = dot(normal, way_up);
-    return sensor.ambient.xyz * max(vec3<f32>(1.0) + sensor.ambient_relief.xyz * tilt, vec3<f32>(0.0));
+// The ambient light at `place`: each channel times the skin's tilt against the way up the
+// finger, as a gel LED's glow. Mirror: src/render/leds.rs ambient_light.
+fn ambient_light(place: GelPlace) -> vec3<f32> {
+    return sensor.ambient.xyz * max(vec3<f32>(1.0) + sensor.ambient_relief.xyz * place.tilt_up, vec3<f32>(0.0));
 }
 
 // The light `colour` of the skin a camera ray sees, past a clear shell's open end: through
@@ -97,31 +94,45 @@ fn shell_end_light(colour: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
     return colour * scale + sensor.shell_tip.xyz * beyond;
 }
 
-// How bright gel LED i makes the skin at p (normal `normal`): a band up the finger above the
-// LED that widens and fades, times the skin's tilt against the light's path. Mirror:
-// src/render/leds.rs gel_light.
-fn gel_light(i: i32, p: vec3<f32>, normal: vec3<f32>) -> f32 {
-    let led = sensor.led_position[i].xyz;
-    let band = sensor.led_band[i];
+// Where a skin point lies for the gel's light, found once per pixel for every gel LED and the
+// ambient: its azimuth, latitude above the hemisphere's equator, height up the skin (z on
+// the cylinder, the hemisphere's centre's z plus the arc above the equator) and how far its
+// normal tilts up the finger. Mirror: src/render/leds.rs GelPlace.
+struct GelPlace {
+    azimuth: f32,
+    cos_latitude: f32,
+    height: f32,
+    tilt_up: f32,
+}
+
+fn gel_place(p: vec3<f32>, normal: vec3<f32>) -> GelPlace {
     let r = sensor.radius;
     let d = sensor.cylinder_length;
-    let rho = length(p.xy);
     let azimuth = atan2(p.y, p.x);
     var latitude = 0.0;
-    var up = p.z - led.z;
+    var height = p.z;
     if p.z > d {
-        latitude = atan2(p.z - d, rho);
-        up = d - led.z + r * latitude;
+        latitude = atan2(p.z - d, length(p.xy));
+        height = d + r * latitude;
     }
-    up = max(up, 0.0);
-    var turn = azimuth - atan2(led.y, led.x);
+    let way_up = vec3<f32>(-sin(latitude) * cos(azimuth), -sin(latitude) * sin(azimuth), cos(latitude));
+    return GelPlace(azimuth, cos(latitude), height, dot(normal, way_up));
+}
+
+// How bright gel LED i makes the skin at `place`: a band up the finger above the LED that
+// widens and fades, times the skin's tilt against the light's path. Mirror:
+// src/render/leds.rs gel_light.
+fn gel_light(i: i32, place: GelPlace) -> f32 {
+    let led = sensor.led_position[i].xyz;
+    let band = sensor.led_band[i];
+    let up = max(place.height - led.z, 0.0);
+    var turn = place.azimuth - atan2(led.y, led.x);
     turn -= TAU * round(turn / TAU);
-    let across = r * turn * cos(latitude);
+    let across = sensor.radius * turn * place.cos_latitude;
     let width = band.x + band.y * up;
     let g = across / width;
     let glow = exp(-0.5 * g * g - up / band.z) * (band.x / width);
-    let way_up = vec3<f32>(-sin(latitude) * cos(azimuth), -sin(latitude) * sin(azimuth), cos(latitude));
-    return glow * max(1.0 + band.w * dot(normal, way_up), 0.0);
+    return glow * max(1.0 + band.w * place.tilt_up, 0.0);
 }
 
 // One 8-bit value from a linear channel and one over the camera's gamma for it.
