@@ -245,6 +245,13 @@ fn listed_leds_light_paint_colour_and_channel_noise_are_refused_by_field() {
         ("[paint]\ncolour = [1.0, 1.0, -1.0]\n", "paint.colour[2]"),
         ("[render]\nnoise = [1.0, -2.0, 0.0]\n", "render.noise[1]"),
         ("[render]\nnoise = \"loud\"\n", "render.noise"),
+        ("[camera]\nblur_px = -1.0\n", "camera.blur_px"),
+        ("[camera]\nblur_px = nan\n", "camera.blur_px"),
+        ("[camera]\nblur_px = 25.0\n", "camera.blur_px"),
+        (
+            "[camera]\nblur_px = 2.0\n[render]\nnoise = 2.0\n",
+            "camera.blur_px",
+        ),
     ] {
         let text = paper_toml() + "\n" + bad;
         let err = Sensor::from_toml("bad", &text).expect_err(bad).to_string();
@@ -429,6 +436,24 @@ fn an_image_circle_mask_loads_round_trips_and_is_refused_by_field() {
         bad.image.circle = Some(circle);
         assert_refused(bad, field);
     }
+}
+
+/// `camera.blur_px` loads, writes back and round-trips (alone in its table); left out it is
+/// 0 and not written.
+#[test]
+fn a_camera_blur_round_trips_and_is_left_out_when_none() {
+    let sharp = Sensor::from_toml("sharp", &paper_toml()).unwrap();
+    assert_eq!(sharp.config.camera.blur_px, 0.0);
+    assert!(!toml::to_string(&sharp.config).unwrap().contains("blur_px"));
+    let s = Sensor::from_toml("soft", &(paper_toml() + "\n[camera]\nblur_px = 2.5\n")).unwrap();
+    assert_eq!(s.config.camera.blur_px, 2.5);
+    assert!(s.config.camera.has_default_response());
+    let written = toml::to_string(&s.config).unwrap();
+    assert!(written.contains("blur_px = 2.5"), "{written}");
+    assert_eq!(
+        Sensor::from_toml("back", &written).unwrap().config,
+        s.config
+    );
 }
 
 /// `light.ambient_relief` loads, writes back and round-trips; left out it is flat and not

@@ -7,6 +7,7 @@ mod support;
 
 use geltip::object::{Object, Solid};
 use geltip::render::gpu::Renderer;
+use geltip::render::softness::Softness;
 use geltip::render::{self, cpu, elastomer, touched, Place, Press};
 use geltip::sensor::Sensor;
 use glam::DVec2;
@@ -205,6 +206,7 @@ fn gpu_matches_the_cpu_pipeline_under_gel_light_and_a_camera_response() {
     c.camera = CameraConfig {
         colour_matrix: [[1.0, -0.3, -0.1], [-0.2, 1.0, -0.05], [-0.1, -0.25, 1.0]],
         gamma: [2.5, 2.8, 3.3],
+        ..CameraConfig::default()
     };
     c.light.ambient = Some([0.05, 0.04, 0.06]);
     let sensor = Sensor::from_config("small-gel", c.clone()).unwrap();
@@ -341,6 +343,24 @@ fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
     assert!(level(&with.frame, x, y).abs_diff(level(&without.frame, x, y)) <= 3);
 }
 
+/// The camera's softness (`[camera] blur_px`): both renderers blur the same frames the same
+/// way (the contact's only where it changed them), and the blur changes them.
+#[test]
+fn gpu_matches_the_cpu_pipeline_through_a_soft_camera() {
+    let mut c = small_sensor().config.clone();
+    c.camera.blur_px = 2.0;
+    let sensor = Sensor::from_config("small-soft", c).unwrap();
+    gpu_matches_cpu(&sensor);
+    let soft = cpu::render(&sensor, None).unwrap();
+    let sharp = cpu::render(&small_sensor(), None).unwrap();
+    assert_eq!(soft.raw.rgba, sharp.frame.rgba);
+    assert!(!close_enough(&diff(
+        &rgb(&soft.frame),
+        &rgb(&sharp.frame),
+        3
+    )));
+}
+
 /// `count` gel LEDs `step_deg` apart, 0.5 mm up the finger, red, green and blue in turn.
 fn gel_ring(count: usize, step_deg: f64) -> Vec<geltip::sensor::LedConfig> {
     (0..count)
@@ -383,7 +403,18 @@ fn gpu_matches_cpu(sensor: &Sensor) {
         // The CPU pipeline over the footprint alone (the reference's pixels elsewhere): as
         // the full CPU render but for a pixel or two at the footprint's edge whose probes see
         // no deformation (measured: at most 4e-5 of the channel values, mean 5e-4 levels).
-        let footprint = cpu::render_contact(&sensor, r.grid(), &reference.frame, &c).unwrap();
+        let footprint = match Softness::of(&sensor) {
+            Some(softness) => cpu::record_contact(
+                &sensor,
+                r.grid(),
+                &reference.raw,
+                &reference.frame,
+                &softness,
+                &c,
+            ),
+            None => cpu::render_contact(&sensor, r.grid(), &reference.raw, &c),
+        }
+        .unwrap();
         let d = diff(&rgb(&footprint), &rgb(&cpu.frame), 3);
         assert!(close_enough(&d), "{solid:?}: CPU footprint render {d:?}");
         let worst = gpu

@@ -269,7 +269,7 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
     // colours alone. A clipped value says only "at least full scale": taken as full scale
     // here, the fit that follows lets it rise. The tip's own light is held.
     let camera = &d.lighting.camera;
-    let unmix = (!camera.is_default())
+    let unmix = (!camera.has_default_response())
         .then(|| invert(&camera.colour_matrix.concat(), 3))
         .flatten();
     let light: Vec<[f64; 3]> = samples

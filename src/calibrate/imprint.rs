@@ -17,6 +17,7 @@ use crate::evaluate::real::{azimuth_error_deg, RealSet};
 use crate::finger::SurfaceCoord;
 use crate::localise::{Localiser, Method};
 use crate::object::{Object, Primitive};
+use crate::render::softness::Softness;
 use crate::render::{cpu, Frame, HeightfieldGrid, Place, Press};
 use crate::sensor::{LedKindName, Leds, Sensor, SensorConfig};
 use glam::DVec2;
@@ -309,8 +310,21 @@ fn look_values(config: &SensorConfig) -> Vec<LookValue> {
             step: 0.05,
         }));
     }
+    // The camera's softness, last: how sharp an imprint's edges reach the image.
+    values.push(LookValue {
+        name: "camera.blur_px",
+        lo: 0.0,
+        hi: BLUR_PX_MAX,
+        step: 0.1,
+    });
     values
 }
+
+/// The largest camera blur (pixels) the fit may reach.
+pub const BLUR_PX_MAX: f64 = 6.0;
+
+/// The camera blur (pixels) the fit starts from at least.
+pub const BLUR_PX_START: f64 = 1.5;
 
 const AMBIENT_RELIEF: [&str; 3] = [
     "light.ambient_relief[0]",
@@ -338,6 +352,7 @@ fn get_look(config: &SensorConfig, radius: f64) -> Vec<f64> {
     if has_gel(config) {
         values.extend(config.light.ambient_relief);
     }
+    values.push(config.camera.blur_px);
     values
 }
 
@@ -368,6 +383,7 @@ fn set_look(config: &SensorConfig, p: &[f64]) -> SensorConfig {
     if gel {
         c.light.ambient_relief = [p[5], p[6], p[7]];
     }
+    c.camera.blur_px = p[if gel { 8 } else { 5 }];
     c
 }
 
@@ -428,34 +444,51 @@ impl Placed {
     }
 }
 
-/// A sensor and its empty finger, rendered by the CPU mirror once: the look's values do not
-/// change the empty finger.
+/// A sensor and its empty finger, rendered by the CPU mirror once (`raw`, before the camera's
+/// softness): the look's values do not change it; the camera's blur, one of them, softens
+/// it for each look.
 struct Stage<'a> {
     sensor: Sensor,
     grid: HeightfieldGrid,
-    reference: &'a Frame,
+    raw: &'a Frame,
+    /// The camera's softness and the empty finger softened by it.
+    softness: Option<(Softness, Frame)>,
 }
 
 impl<'a> Stage<'a> {
-    fn new(sensor: Sensor, reference: &'a Frame) -> Stage<'a> {
+    fn new(sensor: Sensor, raw: &'a Frame) -> Stage<'a> {
+        let softness = Softness::of(&sensor).map(|s| {
+            let soft = s.soften_frame(raw);
+            (s, soft)
+        });
         Stage {
             grid: HeightfieldGrid::for_sensor(&sensor),
             sensor,
-            reference,
+            raw,
+            softness,
         }
     }
 
     /// The rendered change over `located`'s window less the real one, damped as the light
     /// fit damps its residuals.
     fn residuals(&self, located: &Located, real: &[f64], press: &Press) -> Result<Vec<f64>> {
-        let frame = cpu::render_contact(&self.sensor, &self.grid, self.reference, press)?;
+        let (frame, reference) = match &self.softness {
+            Some((softness, soft)) => (
+                cpu::record_contact(&self.sensor, &self.grid, self.raw, soft, softness, press)?,
+                soft,
+            ),
+            None => (
+                cpu::render_contact(&self.sensor, &self.grid, self.raw, press)?,
+                self.raw,
+            ),
+        };
         Ok(located
             .window
             .iter()
             .flat_map(|&i| (0..3).map(move |c| (i, c)))
             .zip(real)
             .map(|((i, c), r)| {
-                let change = frame.rgba[i * 4 + c] as f64 - self.reference.rgba[i * 4 + c] as f64;
+                let change = frame.rgba[i * 4 + c] as f64 - reference.rgba[i * 4 + c] as f64;
                 soft_l1(change - r)
             })
             .collect())
@@ -509,7 +542,7 @@ pub fn fit(
     progress: &dyn Fn(&str),
 ) -> Result<ImprintFit> {
     options.validate()?;
-    let reference = cpu::render(sensor, None)?.frame;
+    let reference = cpu::render(sensor, None)?.raw;
     let looks = look_values(&sensor.config);
     let shell = sensor.config.finger.shell_thickness_mm;
     let frames: Vec<&Located> = chosen.iter().map(|&k| &located[k]).collect();
@@ -517,6 +550,10 @@ pub fn fit(
     let mut start = get_look(&sensor.config, options.start_radius_mm);
     for (v, b) in start.iter_mut().zip(&looks) {
         *v = v.clamp(b.lo, b.hi);
+        // A blur's effect grows as its square: from none, every step would see none.
+        if b.name == "camera.blur_px" {
+            *v = v.max(BLUR_PX_START);
+        }
     }
     let n_look = start.len();
     for _ in &frames {
@@ -676,7 +713,7 @@ pub fn place_all(
     iterations: usize,
 ) -> Result<Vec<Placed>> {
     let sensor = Sensor::from_config("imprint", config.clone())?;
-    let reference = cpu::render(&sensor, None)?.frame;
+    let reference = cpu::render(&sensor, None)?.raw;
     let stage = Stage::new(sensor, &reference);
     chosen
         .par_iter()

@@ -504,7 +504,10 @@ impl Model {
             .collect();
         let camera = match l.camera {
             Some(i) => {
-                let mut c = CameraConfig::default();
+                let mut c = CameraConfig {
+                    blur_px: self.start.config.camera.blur_px,
+                    ..CameraConfig::default()
+                };
                 for (k, (r, col)) in OFF_DIAGONAL.iter().enumerate() {
                     c.colour_matrix[*r][*col] = p[i + k];
                 }

@@ -1,6 +1,7 @@
 //! The whole pipeline on the CPU, stage by stage, from the CPU mirrors: slow (seconds per
 //! frame) but independent of any GPU, so tests can hold the GPU renderer to it.
 
+use super::softness::Softness;
 use super::{camera, contact, elastomer, leds, touched, Frame, HeightfieldGrid, Press, Rect};
 use crate::error::Result;
 use crate::sensor::Sensor;
@@ -10,7 +11,11 @@ use rayon::prelude::*;
 /// Everything the CPU pipeline computed for one frame.
 #[derive(Debug, Clone)]
 pub struct CpuRender {
+    /// The frame as the camera records it (its softness applied, `[camera] blur_px`).
     pub frame: Frame,
+    /// The frame's pixels before the camera's softness (the frame's own without one): what
+    /// [`render_contact`] builds a contact on.
+    pub raw: Frame,
     /// The skin's displacement on the heightfield.
     pub height: Vec<f32>,
     pub penetration: Vec<f32>,
@@ -83,13 +88,18 @@ pub fn render(sensor: &Sensor, contact: Option<&Press>) -> Result<CpuRender> {
         }
     }
 
+    let raw = Frame {
+        width: w,
+        height: h,
+        rgba,
+        indentation,
+    };
     Ok(CpuRender {
-        frame: Frame {
-            width: w,
-            height: h,
-            rgba,
-            indentation,
+        frame: match Softness::of(sensor) {
+            Some(softness) => softness.soften_frame(&raw),
+            None => raw.clone(),
         },
+        raw,
         height,
         penetration,
         over_pressed_texels: over,
@@ -99,23 +109,52 @@ pub fn render(sensor: &Sensor, contact: Option<&Press>) -> Result<CpuRender> {
 }
 
 /// A contact frame made the way the GPU renderer makes it, with the CPU mirrors: `reference`
-/// (the empty finger, e.g. from [`render`] once) with only the pixels whose rays the
-/// deformation reaches cast and shaded again, in parallel on rayon's threads. The
-/// alternative a user has to lavapipe on the same cores; `benches/render.rs` times it beside
-/// the GPU. Noise-free (the sensor's noise is not added).
+/// (the empty finger before the camera's softness, [`CpuRender::raw`] from [`render`] once)
+/// with only the pixels whose rays the deformation reaches cast and shaded again, in
+/// parallel on rayon's threads. The alternative a user has to lavapipe on the same cores;
+/// `benches/render.rs` times it beside the GPU. Noise-free (the sensor's noise is not added),
+/// and before the camera's softness ([`record_contact`] applies it).
 pub fn render_contact(
     sensor: &Sensor,
     grid: &HeightfieldGrid,
     reference: &Frame,
     contact: &Press,
 ) -> Result<Frame> {
+    Ok(render_contact_over(sensor, grid, reference, contact)?.0)
+}
+
+/// [`render_contact`] as the camera records it: `softness` (the sensor's) applied where the
+/// contact changed the frame, the rest `soft_reference` (`reference` softened).
+pub fn record_contact(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    reference: &Frame,
+    soft_reference: &Frame,
+    softness: &Softness,
+    contact: &Press,
+) -> Result<Frame> {
+    let (raw, changed) = render_contact_over(sensor, grid, reference, contact)?;
+    let mut rgba = soft_reference.rgba.clone();
+    if let Some(rect) = changed {
+        softness.soften_changed(&raw.rgba, &mut rgba, rect);
+    }
+    Ok(Frame { rgba, ..raw })
+}
+
+/// [`render_contact`] and the pixel rect it may have changed.
+fn render_contact_over(
+    sensor: &Sensor,
+    grid: &HeightfieldGrid,
+    reference: &Frame,
+    contact: &Press,
+) -> Result<(Frame, Option<Rect>)> {
     let mut frame = reference.clone();
     let pose = contact.pose(sensor)?;
     let config = &sensor.config.elastomer;
     let kernel = elastomer::Kernel::for_config(&sensor.config, grid);
     let Some(footprint) = contact::footprint(sensor, grid, &pose, &contact.object, kernel.reach_mm)
     else {
-        return Ok(frame);
+        return Ok((frame, None));
     };
     let rect = footprint.texels;
     let penetration = contact::penetration_field(sensor, grid, &pose, &contact.object, rect);
@@ -131,7 +170,7 @@ pub fn render_contact(
     );
     let normals = elastomer::skin_normals(&sensor.finger, grid, &height, rect);
     let Some(pixels) = footprint.pixels else {
-        return Ok(frame);
+        return Ok((frame, None));
     };
     let w = sensor.width;
     let touched_pixels = touched::select_touched(sensor, grid, &height, pixels);
@@ -154,5 +193,5 @@ pub fn render_contact(
         frame.rgba[i * 4..i * 4 + 3].copy_from_slice(&colour);
         frame.indentation[i] = depth;
     }
-    Ok(frame)
+    Ok((frame, Some(pixels)))
 }

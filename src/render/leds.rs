@@ -177,7 +177,7 @@ pub fn pixel_colour(sensor: &Sensor, light: &Lighting, pixel: DVec2, hit: &SkinH
 /// The 8-bit values the camera records for linear light `c`: the plain gamma 2.2 of
 /// [`encode`] for the default camera, else its colour matrix and per-channel gamma.
 pub fn record(camera: &CameraConfig, c: DVec3) -> [u8; 3] {
-    if camera.is_default() {
+    if camera.has_default_response() {
         return c.to_array().map(encode);
     }
     let mixed = camera.mix(c).to_array();

@@ -19,6 +19,7 @@ pub mod elastomer;
 pub mod gpu;
 pub mod leds;
 pub mod pool;
+pub mod softness;
 pub mod touched;
 pub mod uniforms;
 

@@ -238,7 +238,7 @@ impl SensorUniform {
             colour_matrix: camera.colour_matrix.map(row),
             inverse_gamma: row(camera.gamma.map(|g| 1.0 / g)),
             gel_leds: light.has_gel_leds() as u32,
-            camera_response: !camera.is_default() as u32,
+            camera_response: !camera.has_default_response() as u32,
             has_shell_end: light.shell_end.is_some() as u32,
             pad: 0,
             image_circle: c.image.circle.map_or([0.0; 4], |[cx, cy, r]| {

@@ -372,6 +372,13 @@ impl SensorConfig {
         non_negative("paint.specular", self.paint.specular)?;
         finite_positive("paint.shininess", self.paint.shininess)?;
         self.render.noise.validate()?;
+        if self.camera.blur_px > 0.0 && self.render.noise.any() {
+            // The renderer adds its noise before the frame reaches the camera's blur.
+            return Err(GeltipError::config(
+                "camera.blur_px",
+                "cannot be combined with render.noise (the noise would be blurred); add noise afterwards, e.g. `dataset --noise`",
+            ));
+        }
         let r = &self.render;
         if !(16..=4096).contains(&r.heightfield_texels) {
             return Err(GeltipError::config(

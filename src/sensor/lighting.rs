@@ -353,6 +353,14 @@ pub struct CameraConfig {
     /// Rows: output R, G, B from input (R, G, B).
     pub colour_matrix: [[f64; 3]; 3],
     pub gamma: [f64; 3],
+    /// The camera's softness: each recorded frame blurred by a Gaussian of this many
+    /// pixels (standard deviation) over the pixels the lens sees; 0, none.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub blur_px: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl Default for CameraConfig {
@@ -360,15 +368,25 @@ impl Default for CameraConfig {
         CameraConfig {
             colour_matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             gamma: [2.2; 3],
+            blur_px: 0.0,
         }
     }
 }
 
+/// The largest camera blur a sensor file may ask for (pixels).
+pub const MAX_BLUR_PX: f64 = 20.0;
+
 impl CameraConfig {
-    /// Whether this is the default (no `[camera]` table): left out when a config is written,
-    /// and the renderer then takes its plain gamma-2.2 path.
+    /// Whether this is the default (no `[camera]` table): left out when a config is written.
     pub fn is_default(&self) -> bool {
         *self == CameraConfig::default()
+    }
+
+    /// Whether the colour response is the default (identity mixing, gamma 2.2 on every
+    /// channel): the renderer then takes its plain gamma-2.2 path.
+    pub fn has_default_response(&self) -> bool {
+        let d = CameraConfig::default();
+        self.colour_matrix == d.colour_matrix && self.gamma == d.gamma
     }
 
     /// The linear light `c` as the camera records it, before the gamma: mixed by the matrix.
@@ -396,6 +414,16 @@ impl CameraConfig {
                     format!("must be between 0.2 and 5, got {g}"),
                 ));
             }
+        }
+        finite("camera.blur_px", self.blur_px)?;
+        if !(0.0..=MAX_BLUR_PX).contains(&self.blur_px) {
+            return Err(GeltipError::config(
+                "camera.blur_px",
+                format!(
+                    "must be between 0 and {MAX_BLUR_PX} px, got {}",
+                    self.blur_px
+                ),
+            ));
         }
         Ok(())
     }

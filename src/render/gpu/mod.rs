@@ -36,6 +36,7 @@ pub use prepare::{PreparedBatch, Preparer};
 use crate::error::{GeltipError, Result};
 use crate::gpu::GpuContext;
 use crate::object::Object;
+use crate::render::softness::Softness;
 use crate::render::uniforms::{object_kind, FrameUniform, SensorUniform};
 use crate::render::{Frame, GroundTruth, HeightfieldGrid, Press, Rect};
 use crate::sensor::Sensor;
@@ -132,7 +133,11 @@ pub struct Renderer {
     lanes: usize,
     /// Frames recorded into one submission ([`Self::batch_frames`]).
     batch: usize,
+    /// The empty finger as the camera records it (its softness applied).
     reference: Frame,
+    /// The camera's softness, and the empty finger's pixels before it, which frames are
+    /// assembled on before they are softened.
+    softness: Option<(Softness, Vec<u8>)>,
     /// Frames given noise so far: each draws its seed from it ([`Self::next_noise_seed`]).
     seed_counter: u32,
     timings: Timings,
@@ -178,6 +183,7 @@ impl Renderer {
                 rgba: Vec::new(),
                 indentation: Vec::new(),
             },
+            softness: Softness::of(sensor).map(|s| (s, Vec::new())),
             seed_counter: 0,
             timings: Timings::default(),
         };

@@ -71,10 +71,14 @@ impl Renderer {
         // works: this thread would only wait, and after the wait only the rects read are
         // left to copy over them.
         let pixels = width as usize * height as usize;
+        let raw_reference = match &self.softness {
+            Some((_, raw)) => raw,
+            None => &self.reference.rgba,
+        };
         let mut frames: Vec<FrameParts> = rects
             .par_iter()
             .map(|_| FrameParts {
-                rgba: self.reference.rgba.clone(),
+                rgba: raw_reference.clone(),
                 indentation: vec![0.0; pixels],
                 counters: Vec::new(),
             })
@@ -116,6 +120,17 @@ impl Renderer {
                 .collect();
             (mapped, fields)
         })?;
+        // The camera's softness, where each frame's contacts changed it.
+        if let Some((softness, _)) = &self.softness {
+            let soft_reference = &self.reference.rgba;
+            frames.par_iter_mut().zip(rects).for_each(|(frame, rect)| {
+                let mut out = soft_reference.clone();
+                if let Some(r) = *rect {
+                    softness.soften_changed(&frame.rgba, &mut out, r);
+                }
+                frame.rgba = out;
+            });
+        }
         Ok(ReadFrames {
             frames,
             fields: read_fields,

@@ -21,7 +21,14 @@ impl Renderer {
         let rgba = self.read_whole_image()?;
         let (w, h) = (self.sensor.width, self.sensor.height);
         let render = self.timings.render;
-        self.reference.rgba = rgba;
+        self.reference.rgba = match &mut self.softness {
+            Some((softness, raw)) => {
+                let soft = softness.soften(&rgba);
+                *raw = rgba;
+                soft
+            }
+            None => rgba,
+        };
         self.reference.indentation = vec![0.0; (w * h) as usize];
         self.timings = Timings {
             prepare: Duration::ZERO,
