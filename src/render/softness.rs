@@ -99,66 +99,67 @@ impl Softness {
     fn soften_over(&self, raw: &[u8], out: &mut [u8], area: Rect) {
         let (w, h) = (self.width as usize, self.height as usize);
         let reach = self.weights.len() - 1;
-        // The rows the vertical pass needs: the area's, grown by the reach.
-        let y_lo = (area.y as usize).saturating_sub(reach);
-        let y_hi = (area.y as usize + area.h as usize + reach).min(h);
-        let (x_lo, x_hi) = (area.x as usize, (area.x + area.w) as usize);
-        let cols = x_hi - x_lo;
-        // Horizontal pass: per row, per column of the area, (R, G, B, seen) summed.
-        let rows: Vec<Vec<[f32; 4]>> = (y_lo..y_hi)
-            .into_par_iter()
-            .map(|y| {
-                (x_lo..x_hi)
+        // The pixels the area's blur reads: the area grown by the reach, clipped.
+        let (ax0, ay0) = (area.x as usize, area.y as usize);
+        let (ax1, ay1) = (ax0 + area.w as usize, ay0 + area.h as usize);
+        let (sx0, sy0) = (ax0.saturating_sub(reach), ay0.saturating_sub(reach));
+        let (sx1, sy1) = ((ax1 + reach).min(w), (ay1 + reach).min(h));
+        let cols = ax1 - ax0;
+        // Horizontal pass, per source row: (R, G, B) x seen and seen, summed over the taps.
+        let mut across = vec![[0.0f32; 4]; (sy1 - sy0) * cols];
+        across
+            .par_chunks_mut(cols.max(1))
+            .enumerate()
+            .for_each(|(row, sums)| {
+                let y = sy0 + row;
+                let line: Vec<[f32; 4]> = (sx0..sx1)
                     .map(|x| {
-                        let mut sum = [0.0f32; 4];
-                        let lo = x.saturating_sub(reach);
-                        let hi = (x + reach).min(w - 1);
-                        for xx in lo..=hi {
-                            let i = y * w + xx;
-                            let m = self.seen[i];
-                            if m == 0.0 {
-                                continue;
-                            }
-                            let k = self.weights[xx.abs_diff(x)] * m;
-                            for c in 0..3 {
-                                sum[c] += k * raw[i * 4 + c] as f32;
-                            }
-                            sum[3] += k;
-                        }
-                        sum
+                        let i = y * w + x;
+                        let m = self.seen[i];
+                        let p = &raw[i * 4..i * 4 + 3];
+                        [p[0] as f32 * m, p[1] as f32 * m, p[2] as f32 * m, m]
                     })
-                    .collect()
-            })
-            .collect();
-        // Vertical pass over the area's rows.
-        let blurred: Vec<(usize, [u8; 3])> = (area.y as usize..(area.y + area.h) as usize)
-            .into_par_iter()
-            .flat_map_iter(|y| {
-                let rows = &rows;
-                (0..cols).filter_map(move |col| {
-                    let x = x_lo + col;
-                    let i = y * w + x;
-                    if self.seen[i] == 0.0 {
-                        return None;
+                    .collect();
+                for (col, sum) in sums.iter_mut().enumerate() {
+                    let x = ax0 + col;
+                    let (lo, hi) = (x.saturating_sub(reach).max(sx0), (x + reach).min(sx1 - 1));
+                    let mut acc = [0.0f32; 4];
+                    for xx in lo..=hi {
+                        let k = self.weights[xx.abs_diff(x)];
+                        let v = line[xx - sx0];
+                        for c in 0..4 {
+                            acc[c] += k * v[c];
+                        }
                     }
-                    let mut sum = [0.0f32; 4];
-                    let lo = y.saturating_sub(reach).max(y_lo);
-                    let hi = (y + reach).min(y_hi - 1);
+                    *sum = acc;
+                }
+            });
+        // Vertical pass over the area's rows, written straight into `out`.
+        let row_bytes = w * 4;
+        out.par_chunks_mut(row_bytes)
+            .enumerate()
+            .skip(ay0)
+            .take(ay1 - ay0)
+            .for_each(|(y, line)| {
+                let (lo, hi) = (y.saturating_sub(reach).max(sy0), (y + reach).min(sy1 - 1));
+                for col in 0..cols {
+                    let x = ax0 + col;
+                    if self.seen[y * w + x] == 0.0 {
+                        continue;
+                    }
+                    let mut acc = [0.0f32; 4];
                     for yy in lo..=hi {
                         let k = self.weights[yy.abs_diff(y)];
-                        let s = rows[yy - y_lo][col];
+                        let v = across[(yy - sy0) * cols + col];
                         for c in 0..4 {
-                            sum[c] += k * s[c];
+                            acc[c] += k * v[c];
                         }
                     }
-                    let v = sum.map(|s| s / sum[3]);
-                    Some((i, [0, 1, 2].map(|c| v[c].round().clamp(0.0, 255.0) as u8)))
-                })
-            })
-            .collect();
-        for (i, v) in blurred {
-            out[i * 4..i * 4 + 3].copy_from_slice(&v);
-        }
+                    for c in 0..3 {
+                        line[x * 4 + c] = (acc[c] / acc[3]).round().clamp(0.0, 255.0) as u8;
+                    }
+                }
+            });
     }
 }
 
