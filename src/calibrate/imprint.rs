@@ -456,8 +456,9 @@ struct Stage<'a> {
 }
 
 impl<'a> Stage<'a> {
-    fn new(sensor: Sensor, raw: &'a Frame) -> Stage<'a> {
-        let softness = Softness::of(&sensor).map(|s| {
+    /// `seen`: the pixels the lens sees ([`Softness::seen_by`]), which no look changes.
+    fn new(sensor: Sensor, raw: &'a Frame, seen: &Arc<[f32]>) -> Stage<'a> {
+        let softness = Softness::with_seen(&sensor, seen.clone()).map(|s| {
             let soft = s.soften_frame(raw);
             (s, soft)
         });
@@ -543,6 +544,7 @@ pub fn fit(
 ) -> Result<ImprintFit> {
     options.validate()?;
     let reference = cpu::render(sensor, None)?.raw;
+    let seen = Softness::seen_by(sensor);
     let looks = look_values(&sensor.config);
     let shell = sensor.config.finger.shell_thickness_mm;
     let frames: Vec<&Located> = chosen.iter().map(|&k| &located[k]).collect();
@@ -593,7 +595,7 @@ pub fn fit(
     let total = real.iter().map(Vec::len).sum::<usize>();
     let residuals = |p: &[f64]| -> Vec<f64> {
         let stage = match Sensor::from_config("imprint", set_look(&sensor.config, p)) {
-            Ok(s) => Stage::new(s, &reference),
+            Ok(s) => Stage::new(s, &reference, &seen),
             Err(e) => {
                 errors.keep(e);
                 return vec![f64::INFINITY; total];
@@ -714,7 +716,8 @@ pub fn place_all(
 ) -> Result<Vec<Placed>> {
     let sensor = Sensor::from_config("imprint", config.clone())?;
     let reference = cpu::render(&sensor, None)?.raw;
-    let stage = Stage::new(sensor, &reference);
+    let seen = Softness::seen_by(&sensor);
+    let stage = Stage::new(sensor, &reference, &seen);
     chosen
         .par_iter()
         .map(|&k| place_on(&stage, radius, &located[k], iterations))

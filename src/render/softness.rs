@@ -10,6 +10,7 @@ use super::{Frame, Rect};
 use crate::sensor::Sensor;
 use glam::DVec2;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// A sensor's camera softness: its kernel and the pixels its lens sees.
 #[derive(Debug, Clone)]
@@ -19,12 +20,35 @@ pub struct Softness {
     /// Gaussian weights at offsets 0..=reach.
     weights: Vec<f32>,
     /// 1 where the lens sees the skin, else 0 (row-major).
-    seen: Vec<f32>,
+    seen: Arc<[f32]>,
 }
 
 impl Softness {
     /// The softness of `sensor`'s camera, or `None` when it has none (`blur_px` 0).
     pub fn of(sensor: &Sensor) -> Option<Softness> {
+        if sensor.config.camera.blur_px <= 0.0 {
+            return None;
+        }
+        Softness::with_seen(sensor, Softness::seen_by(sensor))
+    }
+
+    /// The pixels `sensor`'s lens sees: 1 where it does, else 0 (row-major). It depends on
+    /// the lens and the image alone, so a caller trying many blurs finds it once.
+    pub fn seen_by(sensor: &Sensor) -> Arc<[f32]> {
+        let width = sensor.width;
+        (0..width * sensor.height)
+            .into_par_iter()
+            .map(|i| {
+                let pixel = DVec2::new((i % width) as f64, (i / width) as f64);
+                f32::from(u8::from(sensor.ray_direction(pixel).is_some()))
+            })
+            .collect::<Vec<f32>>()
+            .into()
+    }
+
+    /// [`Softness::of`] with the lens's pixels already found ([`Softness::seen_by`] of a
+    /// sensor with the same lens and image).
+    pub fn with_seen(sensor: &Sensor, seen: Arc<[f32]>) -> Option<Softness> {
         let sigma = sensor.config.camera.blur_px;
         if sigma <= 0.0 {
             return None;
@@ -33,17 +57,9 @@ impl Softness {
         let weights = (0..=reach)
             .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp() as f32)
             .collect();
-        let (width, height) = (sensor.width, sensor.height);
-        let seen = (0..width * height)
-            .into_par_iter()
-            .map(|i| {
-                let pixel = DVec2::new((i % width) as f64, (i / width) as f64);
-                f32::from(u8::from(sensor.ray_direction(pixel).is_some()))
-            })
-            .collect();
         Some(Softness {
-            width,
-            height,
+            width: sensor.width,
+            height: sensor.height,
             weights,
             seen,
         })
