@@ -126,6 +126,17 @@ fn the_fitted_look_matches_real_imprints_it_did_not_see() -> Result<()> {
         before > none + 1.0,
         "preset {before:.2} dB, no imprint {none:.2}"
     );
+    // The light alone: the preset's empty finger against the presses' t = 0 frames, over
+    // the whole circle (about 32 dB on these sessions) and inside the windows; the render's
+    // error is about the light's and the composite's added.
+    let (circle, window) = (all.after.light_circle.psnr_db(), all.after.light.psnr_db());
+    assert!(circle > 28.0 && window > 25.0, "{circle:.2} / {window:.2}");
+    let render = all.after.render.psnr_db();
+    let added = -10.0 * (10f64.powf(-window / 10.0) + 10f64.powf(-after / 10.0)).log10();
+    assert!(
+        (render - added).abs() < 2.0,
+        "render {render:.2}, light and composite added {added:.2}"
+    );
     // The written sensor file is the fitted look and loads back as it.
     let out = temp_in("imprint-real", "sensor.toml");
     let files = job::write(&judged, out.parent().unwrap())?;
@@ -166,5 +177,10 @@ fn bad_input_is_refused_on_one_line() -> Result<()> {
         text.contains("fit-frames") && !text.contains('\n'),
         "{text}"
     );
+    let text = "huber"
+        .parse::<geltip::calibrate::imprint::Loss>()
+        .unwrap_err()
+        .to_string();
+    assert!(text.contains("loss") && text.contains("huber"), "{text}");
     Ok(())
 }

@@ -41,6 +41,54 @@ pub struct ImprintOptions {
     pub place_iterations: usize,
     /// The indenter's radius (mm) the fit starts from.
     pub start_radius_mm: f64,
+    /// How each pixel's residual counts.
+    pub loss: Loss,
+}
+
+/// How a pixel's residual (the rendered change less the real one, in levels) counts in the
+/// fit and in placing each scored frame's contact.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Loss {
+    /// Soft-L1 with the light fit's scale ([`super::fit::ROBUST_SCALE`], 6 levels): a
+    /// residual beyond a few levels counts about linearly, so a strong imprint's flanks
+    /// weigh less than in the PSNR the look is scored by.
+    #[default]
+    SoftL1,
+    /// Squared, as the PSNR the look is scored by.
+    Squared,
+}
+
+impl Loss {
+    /// The value whose square the fit sums.
+    fn apply(self, r: f64) -> f64 {
+        match self {
+            Loss::Squared => r,
+            Loss::SoftL1 => soft_l1(r),
+        }
+    }
+
+    /// The name `--loss` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Loss::Squared => "squared",
+            Loss::SoftL1 => "soft-l1",
+        }
+    }
+}
+
+impl std::str::FromStr for Loss {
+    type Err = GeltipError;
+
+    fn from_str(s: &str) -> Result<Loss> {
+        match s {
+            "squared" => Ok(Loss::Squared),
+            "soft-l1" => Ok(Loss::SoftL1),
+            _ => Err(GeltipError::option(
+                "loss",
+                format!("must be squared or soft-l1, got {s:?}"),
+            )),
+        }
+    }
 }
 
 impl Default for ImprintOptions {
@@ -52,6 +100,7 @@ impl Default for ImprintOptions {
             iterations: 20,
             place_iterations: 12,
             start_radius_mm: 6.0,
+            loss: Loss::default(),
         }
     }
 }
@@ -242,12 +291,22 @@ pub fn spread(located: &[Located], n: usize, taken: &[usize]) -> Vec<usize> {
     out
 }
 
-/// The look's values the fit moves: name, box, finite-difference step.
+/// One of the look's values the fit moves: its name, box and finite-difference step, and
+/// where it lives in the sensor's configuration (none for the indenter's radius, which is
+/// the indenter's, not the sensor's).
 struct LookValue {
     name: &'static str,
     lo: f64,
     hi: f64,
     step: f64,
+    field: Option<Field>,
+}
+
+/// How a look value is read from and written into a sensor's configuration.
+#[derive(Clone, Copy)]
+struct Field {
+    get: fn(&SensorConfig) -> f64,
+    set: fn(&mut SensorConfig, f64),
 }
 
 /// Whether the sensor's light is carried in the gel (its tilt term is the LEDs' relief) or
@@ -256,67 +315,125 @@ fn has_gel(config: &SensorConfig) -> bool {
     matches!(&config.leds, Leds::List(list) if list.iter().any(|l| l.kind == LedKindName::Gel))
 }
 
+/// The gel LEDs' shared relief: the first gel LED's (the fit sets them all alike).
+fn gel_relief(config: &SensorConfig) -> f64 {
+    match &config.leds {
+        Leds::List(list) => list
+            .iter()
+            .find(|l| l.kind == LedKindName::Gel)
+            .map(|l| l.gel_spread().relief)
+            .unwrap_or(1.0),
+        _ => 1.0,
+    }
+}
+
+fn set_gel_relief(config: &mut SensorConfig, v: f64) {
+    if let Leds::List(list) = &mut config.leds {
+        for l in list.iter_mut().filter(|l| l.kind == LedKindName::Gel) {
+            l.relief = Some(v);
+        }
+    }
+}
+
 fn look_values(config: &SensorConfig) -> Vec<LookValue> {
     let shell = config.finger.shell_thickness_mm;
+    let value = |name, lo, hi, step, field| LookValue {
+        name,
+        lo,
+        hi,
+        step,
+        field,
+    };
+    let at = |get, set| Some(Field { get, set });
     let tilt = if has_gel(config) {
-        LookValue {
-            name: "leds.relief",
-            lo: -10.0,
-            hi: 10.0,
-            step: 0.05,
-        }
+        value(
+            "leds.relief",
+            -10.0,
+            10.0,
+            0.05,
+            at(gel_relief, set_gel_relief),
+        )
     } else {
-        LookValue {
-            name: "paint.specular",
-            lo: 0.0,
-            hi: 20.0,
-            step: 0.02,
-        }
+        value(
+            "paint.specular",
+            0.0,
+            20.0,
+            0.02,
+            at(|c| c.paint.specular, |c, v| c.paint.specular = v),
+        )
     };
     let mut values = vec![
-        LookValue {
-            name: "indenter.radius_mm",
-            lo: RADIUS_MM.0,
-            hi: RADIUS_MM.1,
-            step: 0.1,
-        },
-        LookValue {
-            name: "elastomer.blend_mm",
-            lo: 0.05,
-            hi: 3.0,
-            step: 0.05,
-        },
-        LookValue {
-            name: "elastomer.drape_mm",
-            lo: shell,
-            hi: shell.max(20.0),
-            step: 0.1,
-        },
-        LookValue {
-            name: "elastomer.bulge",
-            lo: 0.0,
-            hi: 1.0,
-            step: 0.05,
-        },
+        value("indenter.radius_mm", RADIUS_MM.0, RADIUS_MM.1, 0.1, None),
+        value(
+            "elastomer.blend_mm",
+            0.05,
+            3.0,
+            0.05,
+            at(|c| c.elastomer.blend_mm, |c, v| c.elastomer.blend_mm = v),
+        ),
+        value(
+            "elastomer.drape_mm",
+            shell,
+            shell.max(20.0),
+            0.1,
+            at(
+                |c| c.elastomer.drape_mm,
+                |c, v| c.elastomer.drape_mm = v.max(c.finger.shell_thickness_mm),
+            ),
+        ),
+        value(
+            "elastomer.bulge",
+            0.0,
+            1.0,
+            0.05,
+            at(|c| c.elastomer.bulge, |c, v| c.elastomer.bulge = v),
+        ),
         tilt,
     ];
     if has_gel(config) {
         // Light carried in the gel shades the imprint's flanks; the ambient light may be
         // carried there too, each channel as far as the real imprints show.
-        values.extend(AMBIENT_RELIEF.map(|name| LookValue {
-            name,
-            lo: -10.0,
-            hi: 10.0,
-            step: 0.05,
-        }));
+        values.extend([
+            value(
+                AMBIENT_RELIEF[0],
+                -10.0,
+                10.0,
+                0.05,
+                at(
+                    |c| c.light.ambient_relief[0],
+                    |c, v| c.light.ambient_relief[0] = v,
+                ),
+            ),
+            value(
+                AMBIENT_RELIEF[1],
+                -10.0,
+                10.0,
+                0.05,
+                at(
+                    |c| c.light.ambient_relief[1],
+                    |c, v| c.light.ambient_relief[1] = v,
+                ),
+            ),
+            value(
+                AMBIENT_RELIEF[2],
+                -10.0,
+                10.0,
+                0.05,
+                at(
+                    |c| c.light.ambient_relief[2],
+                    |c, v| c.light.ambient_relief[2] = v,
+                ),
+            ),
+        ]);
     }
     // The camera's softness, last: how sharp an imprint's edges reach the image.
-    values.push(LookValue {
-        name: "camera.blur_px",
-        lo: 0.0,
-        hi: BLUR_PX_MAX,
-        step: 0.1,
-    });
+    values.push(value(
+        "camera.blur_px",
+        0.0,
+        BLUR_PX_MAX,
+        0.1,
+        at(|c| c.camera.blur_px, |c, v| c.camera.blur_px = v),
+    ));
     values
 }
 
@@ -332,28 +449,12 @@ const AMBIENT_RELIEF: [&str; 3] = [
     "light.ambient_relief[2]",
 ];
 
-/// The look's values in `config` ([`look_values`]' order), the radius first.
+/// The look's values in `config` ([`look_values`]' order) with an indenter of `radius` mm.
 fn get_look(config: &SensorConfig, radius: f64) -> Vec<f64> {
-    let tilt = match &config.leds {
-        Leds::List(list) if has_gel(config) => list
-            .iter()
-            .find(|l| l.kind == LedKindName::Gel)
-            .map(|l| l.gel_spread().relief)
-            .unwrap_or(1.0),
-        _ => config.paint.specular,
-    };
-    let mut values = vec![
-        radius,
-        config.elastomer.blend_mm,
-        config.elastomer.drape_mm,
-        config.elastomer.bulge,
-        tilt,
-    ];
-    if has_gel(config) {
-        values.extend(config.light.ambient_relief);
-    }
-    values.push(config.camera.blur_px);
-    values
+    look_values(config)
+        .iter()
+        .map(|l| l.field.map_or(radius, |f| (f.get)(config)))
+        .collect()
 }
 
 /// The look's values in `config` with an indenter of `radius` mm, named as the fit names them.
@@ -365,25 +466,15 @@ pub fn look(config: &SensorConfig, radius: f64) -> Vec<(&'static str, f64)> {
         .collect()
 }
 
-/// `config` with the look `p` (the radius, `p[0]`, is the indenter's, not the sensor's).
+/// `config` with the look `p` ([`look_values`]' order; the radius is the indenter's, not the
+/// sensor's).
 fn set_look(config: &SensorConfig, p: &[f64]) -> SensorConfig {
     let mut c = config.clone();
-    c.elastomer.blend_mm = p[1];
-    c.elastomer.drape_mm = p[2].max(c.finger.shell_thickness_mm);
-    c.elastomer.bulge = p[3];
-    let gel = has_gel(&c);
-    match &mut c.leds {
-        Leds::List(list) if gel => {
-            for l in list.iter_mut().filter(|l| l.kind == LedKindName::Gel) {
-                l.relief = Some(p[4]);
-            }
+    for (l, &v) in look_values(config).iter().zip(p) {
+        if let Some(field) = l.field {
+            (field.set)(&mut c, v);
         }
-        _ => c.paint.specular = p[4],
     }
-    if gel {
-        c.light.ambient_relief = [p[5], p[6], p[7]];
-    }
-    c.camera.blur_px = p[if gel { 8 } else { 5 }];
     c
 }
 
@@ -453,11 +544,12 @@ struct Stage<'a> {
     raw: &'a Frame,
     /// The camera's softness and the empty finger softened by it.
     softness: Option<(Softness, Frame)>,
+    loss: Loss,
 }
 
 impl<'a> Stage<'a> {
     /// `seen`: the pixels the lens sees ([`Softness::seen_by`]), which no look changes.
-    fn new(sensor: Sensor, raw: &'a Frame, seen: &Arc<[f32]>) -> Stage<'a> {
+    fn new(sensor: Sensor, raw: &'a Frame, seen: &Arc<[f32]>, loss: Loss) -> Stage<'a> {
         let softness = Softness::with_seen(&sensor, seen.clone()).map(|s| {
             let soft = s.soften_frame(raw);
             (s, soft)
@@ -467,11 +559,12 @@ impl<'a> Stage<'a> {
             sensor,
             raw,
             softness,
+            loss,
         }
     }
 
-    /// The rendered change over `located`'s window less the real one, damped as the light
-    /// fit damps its residuals.
+    /// The rendered change over `located`'s window less the real one, each counted by the
+    /// stage's loss.
     fn residuals(&self, located: &Located, real: &[f64], press: &Press) -> Result<Vec<f64>> {
         let (frame, reference) = match &self.softness {
             Some((softness, soft)) => (
@@ -490,7 +583,7 @@ impl<'a> Stage<'a> {
             .zip(real)
             .map(|((i, c), r)| {
                 let change = frame.rgba[i * 4 + c] as f64 - reference.rgba[i * 4 + c] as f64;
-                soft_l1(change - r)
+                self.loss.apply(change - r)
             })
             .collect())
     }
@@ -507,7 +600,8 @@ pub struct ImprintFit {
     pub at_bounds: Vec<AtBound>,
     /// The fitted frames (indices into the located list) and where each contact ended.
     pub frames: Vec<(usize, Placed)>,
-    /// Half the sum of the damped squared residuals, at the start and the end.
+    /// Half the sum of the squared residuals (each counted by the fit's loss), at the start
+    /// and the end.
     pub cost_before: f64,
     pub cost_after: f64,
     pub iterations: usize,
@@ -595,7 +689,7 @@ pub fn fit(
     let total = real.iter().map(Vec::len).sum::<usize>();
     let residuals = |p: &[f64]| -> Vec<f64> {
         let stage = match Sensor::from_config("imprint", set_look(&sensor.config, p)) {
-            Ok(s) => Stage::new(s, &reference, &seen),
+            Ok(s) => Stage::new(s, &reference, &seen, options.loss),
             Err(e) => {
                 errors.keep(e);
                 return vec![f64::INFINITY; total];
@@ -713,11 +807,12 @@ pub fn place_all(
     located: &[Located],
     chosen: &[usize],
     iterations: usize,
+    loss: Loss,
 ) -> Result<Vec<Placed>> {
     let sensor = Sensor::from_config("imprint", config.clone())?;
     let reference = cpu::render(&sensor, None)?.raw;
     let seen = Softness::seen_by(&sensor);
-    let stage = Stage::new(sensor, &reference, &seen);
+    let stage = Stage::new(sensor, &reference, &seen, loss);
     chosen
         .par_iter()
         .map(|&k| place_on(&stage, radius, &located[k], iterations))
@@ -771,5 +866,31 @@ mod tests {
         );
         let moved = Placed::of(&l, &[1.0, 0.5f64.cos(), 0.5f64.sin()]);
         assert!((moved.s_mm - 11.0).abs() < 1e-9, "{moved:?}");
+    }
+
+    #[test]
+    fn each_look_value_is_written_where_it_is_read() {
+        for preset in ["allsight", "paper"] {
+            let config = crate::sensor::Sensor::preset(preset).unwrap().config;
+            let names: Vec<&str> = look(&config, 6.0).iter().map(|(n, _)| *n).collect();
+            let start = get_look(&config, 6.0);
+            assert_eq!(start[0], 6.0);
+            assert_eq!(set_look(&config, &start), config, "{preset}");
+            // Each value moved alone is read back moved, and only it.
+            for k in 1..start.len() {
+                let mut p = start.clone();
+                p[k] += 0.25;
+                let moved = get_look(&set_look(&config, &p), 6.0);
+                for (j, (&m, &s)) in moved.iter().zip(&start).enumerate() {
+                    let want = if j == k { s + 0.25 } else { s };
+                    assert!(
+                        (m - want).abs() < 1e-12,
+                        "{preset}: {} moved {}",
+                        names[j],
+                        names[k]
+                    );
+                }
+            }
+        }
     }
 }

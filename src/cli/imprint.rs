@@ -36,6 +36,10 @@ pub struct ImprintArgs {
     /// The indenter's radius (mm) the fit starts from.
     #[arg(long, default_value_t = ImprintOptions::default().start_radius_mm)]
     radius: f64,
+    /// How each pixel's residual counts: soft-l1 (large residuals about linearly) or squared
+    /// (as the PSNR the look is scored by).
+    #[arg(long, default_value = "soft-l1", value_parser = ["soft-l1", "squared"])]
+    loss: String,
     /// Directory for sensor.toml, report.json, tables.md and imprints.png.
     #[arg(long)]
     out: PathBuf,
@@ -52,6 +56,7 @@ pub fn imprint(args: ImprintArgs) -> Result<()> {
         iterations: args.iterations,
         place_iterations: ImprintOptions::default().place_iterations,
         start_radius_mm: args.radius,
+        loss: args.loss.parse()?,
     };
     let (judged, _) = imprint::run(&sensor, &set, &args.real, &options, &args.out, &|stage| {
         eprintln!("{stage}...")
@@ -68,6 +73,7 @@ pub fn imprint(args: ImprintArgs) -> Result<()> {
             "scored_frames": all.frames,
             "composite_psnr_db": {"start": db(all.before.composite.psnr_db()), "fitted": db(all.after.composite.psnr_db()), "no_imprint": db(all.unchanged.psnr_db())},
             "render_psnr_db": {"start": db(all.before.render.psnr_db()), "fitted": db(all.after.render.psnr_db())},
+            "light_psnr_db": {"windows": db(all.after.light.psnr_db()), "whole_circle": db(all.after.light_circle.psnr_db())},
             "at_bounds": judged.fit.at_bounds.iter().map(|b| &b.name).collect::<Vec<_>>(),
             "seconds": db(judged.seconds),
         })

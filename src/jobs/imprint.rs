@@ -48,17 +48,24 @@ fn psnr(sum: f64, count: usize) -> f64 {
 }
 
 /// How one look matches a frame inside its window: the render, and the real reference with
-/// the rendered change added (what a dataset composited over real frames holds).
+/// the rendered change added (what a dataset composited over real frames holds). Beside them
+/// the light alone: the look's empty finger against the press's real reference (its t = 0
+/// frame, nothing touching) inside the window and over the whole image circle, so that the
+/// render's error splits into the light's and the imprint's.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Match {
     pub render: Squares,
     pub composite: Squares,
+    pub light: Squares,
+    pub light_circle: Squares,
 }
 
 impl Match {
     fn add(&mut self, other: Match) {
         self.render.add(other.render);
         self.composite.add(other.composite);
+        self.light.add(other.light);
+        self.light_circle.add(other.light_circle);
     }
 }
 
@@ -144,6 +151,7 @@ pub fn judge(
         &located,
         &scored_ids,
         place_steps,
+        options.loss,
     )?;
     let after_places = imprint::place_all(
         &fit.config,
@@ -151,9 +159,11 @@ pub fn judge(
         &located,
         &scored_ids,
         place_steps,
+        options.loss,
     )?;
-    let mut start_look = Look::new(start)?;
-    let mut fitted_look = Look::new(&fitted)?;
+    let circle = circle_pixels(start);
+    let mut start_look = Look::new(start, &circle)?;
+    let mut fitted_look = Look::new(&fitted, &circle)?;
     let mut scored = Vec::new();
     let mut tiles: Vec<Tile> = Vec::new();
     for ((&k, b), a) in scored_ids.iter().zip(before_places).zip(after_places) {
@@ -195,17 +205,34 @@ pub fn judge(
     })
 }
 
-/// A look to judge: its sensor's GPU renderer and empty finger (RGB).
-struct Look {
-    renderer: Renderer,
-    empty: Vec<u8>,
+/// The pixels (row-major indices) of `sensor`'s image circle, less the 2 px rim the windows
+/// leave out too.
+fn circle_pixels(sensor: &Sensor) -> Vec<usize> {
+    let (centre, radius) = sensor.image_circle();
+    let rim = radius - 2.0;
+    let w = sensor.width as usize;
+    (0..w * sensor.height as usize)
+        .filter(|&i| (glam::DVec2::new((i % w) as f64, (i / w) as f64) - centre).length() <= rim)
+        .collect()
 }
 
-impl Look {
-    fn new(sensor: &Sensor) -> Result<Look> {
+/// A look to judge: its sensor's GPU renderer and empty finger (RGB), and the image circle's
+/// pixels.
+struct Look<'a> {
+    renderer: Renderer,
+    empty: Vec<u8>,
+    circle: &'a [usize],
+}
+
+impl<'a> Look<'a> {
+    fn new(sensor: &Sensor, circle: &'a [usize]) -> Result<Look<'a>> {
         let renderer = Renderer::new(sensor)?;
         let empty = renderer.reference().to_rgb().into_raw();
-        Ok(Look { renderer, empty })
+        Ok(Look {
+            renderer,
+            empty,
+            circle,
+        })
     }
 
     /// Renders `placed` and compares it inside `l`'s window; also returns the composite
@@ -226,6 +253,8 @@ impl Look {
             Match {
                 render: squares(&render, &l.frame, &l.window),
                 composite: squares(&composite, &l.frame, &l.window),
+                light: squares(&self.empty, &l.reference, &l.window),
+                light_circle: squares(&self.empty, &l.reference, self.circle),
             },
             composite,
         ))
@@ -346,6 +375,8 @@ fn report_json(
             "composite_psnr_db": finite(m.composite.psnr_db()),
             "render_psnr_db_rgb": rgb(&m.render),
             "composite_psnr_db_rgb": rgb(&m.composite),
+            "light_psnr_db": finite(m.light.psnr_db()),
+            "light_circle_psnr_db": finite(m.light_circle.psnr_db()),
         })
     };
     json!({
@@ -370,6 +401,7 @@ fn report_json(
             "iterations": fit.iterations,
             "renders": fit.renders,
             "start_radius_mm": options.start_radius_mm,
+            "loss": options.loss.name(),
         },
         "rows": rows.iter().map(|r| json!({
             "group": r.group,
@@ -433,6 +465,28 @@ pub fn channel_table(rows: &[Row]) -> String {
     s
 }
 
+/// The fitted look's light alone beside its render, per group: its empty finger against the
+/// presses' real references (their t = 0 frames) over the whole image circle and inside the
+/// windows, and the render and the composite inside the windows. The render's error is about
+/// the light's and the imprint's (the composite's) added as squares.
+pub fn light_table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| group | frames | empty finger vs t = 0, whole circle | empty finger vs t = 0, windows | render, windows | composite, windows |\n|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
+            r.group,
+            r.frames,
+            r.after.light_circle.psnr_db(),
+            r.after.light.psnr_db(),
+            r.after.render.psnr_db(),
+            r.after.composite.psnr_db()
+        ));
+    }
+    s
+}
+
 /// Writes `out`/sensor.toml, report.json, tables.md and imprints.png, each whole or not at all.
 pub fn write(judged: &Judged, out: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
@@ -445,9 +499,10 @@ pub fn write(judged: &Judged, out: &Path) -> Result<Vec<PathBuf>> {
     files.push(path);
     let path = out.join("tables.md");
     let tables = format!(
-        "{}\nBy channel (PSNR in dB of each channel alone):\n\n{}",
+        "{}\nBy channel (PSNR in dB of each channel alone):\n\n{}\nThe fitted look's light alone (its empty finger against each press's t = 0 frame):\n\n{}",
         table(&judged.rows),
-        channel_table(&judged.rows)
+        channel_table(&judged.rows),
+        light_table(&judged.rows)
     );
     output::write_atomic(&path, tables.as_bytes())?;
     files.push(path);
@@ -493,6 +548,7 @@ mod tests {
             after: Match {
                 render: m([650.25, 65.025, 6.5025]),
                 composite: m([65.025, 65.025, 65.025]),
+                ..Match::default()
             },
             unchanged: m([6502.5, 650.25, 65.025]),
         };
@@ -503,5 +559,27 @@ mod tests {
             ),
             "{t}"
         );
+    }
+
+    #[test]
+    fn the_light_table_puts_the_empty_finger_beside_the_render() {
+        let m = |v: f64| Squares {
+            sum: [v; 3],
+            count: 1,
+        };
+        let row = Row {
+            group: "all".into(),
+            frames: 2,
+            before: Match::default(),
+            after: Match {
+                render: m(65.025),
+                composite: m(6.5025),
+                light: m(0.65025),
+                light_circle: m(0.065025),
+            },
+            unchanged: m(650.25),
+        };
+        let t = light_table(&[row]);
+        assert!(t.contains("| all | 2 | 60.0 | 50.0 | 30.0 | 40.0 |"), "{t}");
     }
 }
