@@ -394,36 +394,9 @@ fn look_values(config: &SensorConfig) -> Vec<LookValue> {
         // Light carried in the gel shades the imprint's flanks; the ambient light may be
         // carried there too, each channel as far as the real imprints show.
         values.extend([
-            value(
-                AMBIENT_RELIEF[0],
-                -10.0,
-                10.0,
-                0.05,
-                at(
-                    |c| c.light.ambient_relief[0],
-                    |c, v| c.light.ambient_relief[0] = v,
-                ),
-            ),
-            value(
-                AMBIENT_RELIEF[1],
-                -10.0,
-                10.0,
-                0.05,
-                at(
-                    |c| c.light.ambient_relief[1],
-                    |c, v| c.light.ambient_relief[1] = v,
-                ),
-            ),
-            value(
-                AMBIENT_RELIEF[2],
-                -10.0,
-                10.0,
-                0.05,
-                at(
-                    |c| c.light.ambient_relief[2],
-                    |c, v| c.light.ambient_relief[2] = v,
-                ),
-            ),
+            ambient_relief::<0>(),
+            ambient_relief::<1>(),
+            ambient_relief::<2>(),
         ]);
     }
     // The camera's softness, last: how sharp an imprint's edges reach the image.
@@ -435,6 +408,20 @@ fn look_values(config: &SensorConfig) -> Vec<LookValue> {
         at(|c| c.camera.blur_px, |c, v| c.camera.blur_px = v),
     ));
     values
+}
+
+/// The ambient light's relief in channel `K`, a look value of gel-lit sensors.
+fn ambient_relief<const K: usize>() -> LookValue {
+    LookValue {
+        name: AMBIENT_RELIEF[K],
+        lo: -10.0,
+        hi: 10.0,
+        step: 0.05,
+        field: Some(Field {
+            get: |c| c.light.ambient_relief[K],
+            set: |c, v| c.light.ambient_relief[K] = v,
+        }),
+    }
 }
 
 /// The largest camera blur (pixels) the fit may reach.

@@ -424,45 +424,67 @@ fn report_json(
     })
 }
 
-/// The rows as a Markdown table.
-pub fn table(rows: &[Row]) -> String {
-    let mut s = String::from(
-        "| group | frames | render, start | render, fitted | composite, start | composite, fitted | no imprint |\n|---|---|---|---|---|---|---|\n",
+/// A Markdown table: `header`'s columns, then a line of `cells` per row.
+fn markdown(header: &[&str], rows: &[Row], cells: impl Fn(&Row) -> Vec<String>) -> String {
+    let mut s = format!(
+        "| {} |\n|{}\n",
+        header.join(" | "),
+        "---|".repeat(header.len())
     );
     for r in rows {
-        s.push_str(&format!(
-            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
-            r.group,
-            r.frames,
-            r.before.render.psnr_db(),
-            r.after.render.psnr_db(),
-            r.before.composite.psnr_db(),
-            r.after.composite.psnr_db(),
-            r.unchanged.psnr_db()
-        ));
+        s.push_str(&format!("| {} |\n", cells(r).join(" | ")));
     }
     s
 }
 
+fn db(q: &Squares) -> String {
+    format!("{:.1}", q.psnr_db())
+}
+
+/// The rows as a Markdown table.
+pub fn table(rows: &[Row]) -> String {
+    let header = [
+        "group",
+        "frames",
+        "render, start",
+        "render, fitted",
+        "composite, start",
+        "composite, fitted",
+        "no imprint",
+    ];
+    markdown(&header, rows, |r| {
+        vec![
+            r.group.clone(),
+            r.frames.to_string(),
+            db(&r.before.render),
+            db(&r.after.render),
+            db(&r.before.composite),
+            db(&r.after.composite),
+            db(&r.unchanged),
+        ]
+    })
+}
+
 /// The fitted look's rows channel by channel (R / G / B): which colour the look misses.
 pub fn channel_table(rows: &[Row]) -> String {
-    let mut s = String::from(
-        "| group | render, fitted (R / G / B) | composite, fitted (R / G / B) | no imprint (R / G / B) |\n|---|---|---|---|\n",
-    );
+    let header = [
+        "group",
+        "render, fitted (R / G / B)",
+        "composite, fitted (R / G / B)",
+        "no imprint (R / G / B)",
+    ];
     let rgb = |q: &Squares| {
         let [r, g, b] = q.channel_psnr_db();
         format!("{r:.1} / {g:.1} / {b:.1}")
     };
-    for r in rows {
-        s.push_str(&format!(
-            "| {} | {} | {} | {} |\n",
-            r.group,
+    markdown(&header, rows, |r| {
+        vec![
+            r.group.clone(),
             rgb(&r.after.render),
             rgb(&r.after.composite),
-            rgb(&r.unchanged)
-        ));
-    }
-    s
+            rgb(&r.unchanged),
+        ]
+    })
 }
 
 /// The fitted look's light alone beside its render, per group: its empty finger against the
@@ -470,21 +492,24 @@ pub fn channel_table(rows: &[Row]) -> String {
 /// windows, and the render and the composite inside the windows. The render's error is about
 /// the light's and the imprint's (the composite's) added as squares.
 pub fn light_table(rows: &[Row]) -> String {
-    let mut s = String::from(
-        "| group | frames | empty finger vs t = 0, whole circle | empty finger vs t = 0, windows | render, windows | composite, windows |\n|---|---|---|---|---|---|\n",
-    );
-    for r in rows {
-        s.push_str(&format!(
-            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} |\n",
-            r.group,
-            r.frames,
-            r.after.light_circle.psnr_db(),
-            r.after.light.psnr_db(),
-            r.after.render.psnr_db(),
-            r.after.composite.psnr_db()
-        ));
-    }
-    s
+    let header = [
+        "group",
+        "frames",
+        "empty finger vs t = 0, whole circle",
+        "empty finger vs t = 0, windows",
+        "render, windows",
+        "composite, windows",
+    ];
+    markdown(&header, rows, |r| {
+        vec![
+            r.group.clone(),
+            r.frames.to_string(),
+            db(&r.after.light_circle),
+            db(&r.after.light),
+            db(&r.after.render),
+            db(&r.after.composite),
+        ]
+    })
 }
 
 /// Writes `out`/sensor.toml, report.json, tables.md and imprints.png, each whole or not at all.
