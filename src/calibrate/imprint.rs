@@ -59,6 +59,8 @@ pub enum Loss {
 }
 
 impl Loss {
+    pub const ALL: [Loss; 2] = [Loss::SoftL1, Loss::Squared];
+
     /// The value whose square the fit sums.
     fn apply(self, r: f64) -> f64 {
         match self {
@@ -80,14 +82,12 @@ impl std::str::FromStr for Loss {
     type Err = GeltipError;
 
     fn from_str(s: &str) -> Result<Loss> {
-        match s {
-            "squared" => Ok(Loss::Squared),
-            "soft-l1" => Ok(Loss::SoftL1),
-            _ => Err(GeltipError::option(
-                "loss",
-                format!("must be squared or soft-l1, got {s:?}"),
-            )),
-        }
+        Loss::ALL
+            .into_iter()
+            .find(|l| l.name() == s)
+            .ok_or_else(|| {
+                GeltipError::option("loss", format!("must be soft-l1 or squared, got {s:?}"))
+            })
     }
 }
 
@@ -179,6 +179,20 @@ pub struct Skipped {
     pub reason: String,
 }
 
+/// How far inside the image circle's edge (pixels) a scored pixel lies at least.
+pub const CIRCLE_RIM_PX: f64 = 2.0;
+
+/// The pixels (row-major indices) of `sensor`'s image circle, less its [`CIRCLE_RIM_PX`]
+/// rim: where imprints are scored.
+pub fn circle_pixels(sensor: &Sensor) -> Vec<usize> {
+    let (centre, radius) = sensor.image_circle();
+    let rim = radius - CIRCLE_RIM_PX;
+    let w = sensor.width as usize;
+    (0..w * sensor.height as usize)
+        .filter(|&i| (DVec2::new((i % w) as f64, (i / w) as f64) - centre).length() <= rim)
+        .collect()
+}
+
 /// Finds each contact frame's imprint in `set` with the change localiser; frames with none,
 /// or with one away from their labelled azimuth, are skipped with the reason.
 pub fn locate(
@@ -187,9 +201,8 @@ pub fn locate(
     window_px: f64,
 ) -> Result<(Vec<Located>, Vec<Skipped>)> {
     let localiser = Localiser::new(sensor);
-    let (w, h) = (sensor.width, sensor.height);
-    let (circle_centre, circle_radius) = sensor.image_circle();
-    let rim = circle_radius - 2.0;
+    let w = sensor.width;
+    let circle = circle_pixels(sensor);
     let found: Vec<Result<std::result::Result<Located, Skipped>>> = set
         .frames
         .par_iter()
@@ -217,10 +230,12 @@ pub fn locate(
                 }
             }
             let r2 = window_px * window_px;
-            let window = (0..(w * h) as usize)
+            let window = circle
+                .iter()
+                .copied()
                 .filter(|&i| {
                     let p = DVec2::new((i as u32 % w) as f64, (i as u32 / w) as f64);
-                    (p - pixel).length_squared() <= r2 && (p - circle_centre).length() <= rim
+                    (p - pixel).length_squared() <= r2
                 })
                 .collect();
             Ok(Ok(Located {

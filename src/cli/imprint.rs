@@ -3,8 +3,9 @@
 
 use super::under_flags;
 use anyhow::Result;
+use clap::builder::PossibleValuesParser;
 use clap::Args;
-use geltip::calibrate::imprint::ImprintOptions;
+use geltip::calibrate::imprint::{ImprintOptions, Loss};
 use geltip::evaluate::real::RealSet;
 use geltip::jobs::imprint;
 use geltip::sensor::Sensor;
@@ -38,7 +39,7 @@ pub struct ImprintArgs {
     radius: f64,
     /// How each pixel's residual counts: soft-l1 (large residuals about linearly) or squared
     /// (as the PSNR the look is scored by).
-    #[arg(long, default_value = "soft-l1", value_parser = ["soft-l1", "squared"])]
+    #[arg(long, default_value = "soft-l1", value_parser = PossibleValuesParser::new(Loss::ALL.map(Loss::name)))]
     loss: String,
     /// Directory for sensor.toml, report.json, tables.md and imprints.png.
     #[arg(long)]

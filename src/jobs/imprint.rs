@@ -161,7 +161,7 @@ pub fn judge(
         place_steps,
         options.loss,
     )?;
-    let circle = circle_pixels(start);
+    let circle = imprint::circle_pixels(start);
     let mut start_look = Look::new(start, &circle)?;
     let mut fitted_look = Look::new(&fitted, &circle)?;
     let mut scored = Vec::new();
@@ -203,17 +203,6 @@ pub fn judge(
         report,
         seconds,
     })
-}
-
-/// The pixels (row-major indices) of `sensor`'s image circle, less the 2 px rim the windows
-/// leave out too.
-fn circle_pixels(sensor: &Sensor) -> Vec<usize> {
-    let (centre, radius) = sensor.image_circle();
-    let rim = radius - 2.0;
-    let w = sensor.width as usize;
-    (0..w * sensor.height as usize)
-        .filter(|&i| (glam::DVec2::new((i % w) as f64, (i / w) as f64) - centre).length() <= rim)
-        .collect()
 }
 
 /// A look to judge: its sensor's GPU renderer and empty finger (RGB), and the image circle's
