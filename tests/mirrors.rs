@@ -353,7 +353,7 @@ fn gpu_matches_the_cpu_pipeline_through_a_soft_camera() {
     gpu_matches_cpu(&sensor);
     let soft = cpu::render(&sensor, None).unwrap();
     let sharp = cpu::render(&small_sensor(), None).unwrap();
-    assert_eq!(soft.raw.rgba, sharp.frame.rgba);
+    assert_eq!(soft.raw().rgba, sharp.frame.rgba);
     assert!(!close_enough(&diff(
         &rgb(&soft.frame),
         &rgb(&sharp.frame),
@@ -407,12 +407,12 @@ fn gpu_matches_cpu(sensor: &Sensor) {
             Some(softness) => cpu::record_contact(
                 &sensor,
                 r.grid(),
-                &reference.raw,
+                reference.raw(),
                 &reference.frame,
                 &softness,
                 &c,
             ),
-            None => cpu::render_contact(&sensor, r.grid(), &reference.raw, &c),
+            None => cpu::render_contact(&sensor, r.grid(), reference.raw(), &c),
         }
         .unwrap();
         let d = diff(&rgb(&footprint), &rgb(&cpu.frame), 3);

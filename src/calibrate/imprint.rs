@@ -639,7 +639,7 @@ pub fn fit(
     progress: &dyn Fn(&str),
 ) -> Result<ImprintFit> {
     options.validate()?;
-    let reference = cpu::render(sensor, None)?.raw;
+    let reference = cpu::render(sensor, None)?.into_raw();
     let seen = Softness::seen_by(sensor);
     let looks = look_values(&sensor.config);
     let shell = sensor.config.finger.shell_thickness_mm;
@@ -812,7 +812,7 @@ pub fn place_all(
     loss: Loss,
 ) -> Result<Vec<Placed>> {
     let sensor = Sensor::from_config("imprint", config.clone())?;
-    let reference = cpu::render(&sensor, None)?.raw;
+    let reference = cpu::render(&sensor, None)?.into_raw();
     let seen = Softness::seen_by(&sensor);
     let stage = Stage::new(sensor, &reference, &seen, loss);
     chosen

@@ -13,9 +13,9 @@ use rayon::prelude::*;
 pub struct CpuRender {
     /// The frame as the camera records it (its softness applied, `[camera] blur_px`).
     pub frame: Frame,
-    /// The frame's pixels before the camera's softness (the frame's own without one): what
-    /// [`render_contact`] builds a contact on.
-    pub raw: Frame,
+    /// The frame's pixels before the camera's softness, where it has one ([`CpuRender::raw`]
+    /// gives them either way).
+    soft_from: Option<Frame>,
     /// The skin's displacement on the heightfield.
     pub height: Vec<f32>,
     pub penetration: Vec<f32>,
@@ -23,6 +23,19 @@ pub struct CpuRender {
     pub over_pressed_texels: u32,
     pub texel_rect: Option<Rect>,
     pub pixel_rect: Option<Rect>,
+}
+
+impl CpuRender {
+    /// The frame's pixels before the camera's softness (the frame itself without one): what
+    /// [`render_contact`] builds a contact on.
+    pub fn raw(&self) -> &Frame {
+        self.soft_from.as_ref().unwrap_or(&self.frame)
+    }
+
+    /// [`CpuRender::raw`], kept.
+    pub fn into_raw(self) -> Frame {
+        self.soft_from.unwrap_or(self.frame)
+    }
 }
 
 /// Renders `contact` (or the empty finger) with the CPU mirrors, over the whole image.
@@ -94,12 +107,13 @@ pub fn render(sensor: &Sensor, contact: Option<&Press>) -> Result<CpuRender> {
         rgba,
         indentation,
     };
+    let (frame, soft_from) = match Softness::of(sensor) {
+        Some(softness) => (softness.soften_frame(&raw), Some(raw)),
+        None => (raw, None),
+    };
     Ok(CpuRender {
-        frame: match Softness::of(sensor) {
-            Some(softness) => softness.soften_frame(&raw),
-            None => raw.clone(),
-        },
-        raw,
+        frame,
+        soft_from,
         height,
         penetration,
         over_pressed_texels: over,
