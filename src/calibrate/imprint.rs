@@ -86,7 +86,8 @@ impl std::str::FromStr for Loss {
             .into_iter()
             .find(|l| l.name() == s)
             .ok_or_else(|| {
-                GeltipError::option("loss", format!("must be soft-l1 or squared, got {s:?}"))
+                let names = Loss::ALL.map(Loss::name).join(" or ");
+                GeltipError::option("loss", format!("must be {names}, got {s:?}"))
             })
     }
 }
