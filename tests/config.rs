@@ -370,6 +370,10 @@ fn gel_leds_the_camera_and_a_shell_end_are_refused_by_field() {
         (shell_end("tip_colour = [0.1, -0.1, 0.1]"), "shell_end.tip_colour[1]"),
         (shell_end("rim_glow = -2.0"), "shell_end.rim_glow"),
         (shell_end("rim_width_mm = inf"), "shell_end.rim_width_mm"),
+        (
+            shell_end("rim_width_mm = 2.0") + "led_glow_deg = 0.0\n",
+            "shell_end.led_glow_deg",
+        ),
     ]) {
         let bad = bad.as_str();
         let text = paper_toml() + "\n" + bad;
@@ -473,4 +477,36 @@ fn an_ambient_that_shades_with_tilt_round_trips_and_is_left_out_when_flat() {
     assert!(written.contains("ambient_relief"), "{written}");
     let back = Sensor::from_toml("back", &written).unwrap();
     assert_eq!(back.config, s.config);
+}
+
+/// An LED's glow at a shell's end (`end_glow`) needs the end's `led_glow_deg`, and each of
+/// its channels above -1; with both it loads, writes and loads back the same.
+#[test]
+fn an_leds_end_glow_needs_the_ends_spread_and_is_refused_on_one_line() {
+    let preset = include_str!("../assets/sensors/allsight.toml");
+    let first_led = "[[leds]]\nkind = \"gel\"\n";
+    assert!(preset.contains(first_led));
+    let glowing =
+        |glow: &str| preset.replacen(first_led, &format!("{first_led}end_glow = {glow}\n"), 1);
+    let spread =
+        |text: String| text.replacen("[shell_end]\n", "[shell_end]\nled_glow_deg = 25.0\n", 1);
+    for (text, field) in [
+        (glowing("[0.5, 0.0, 0.2]"), "leds[0].end_glow"),
+        (spread(glowing("[-1.5, 0.0, 0.2]")), "leds[0].end_glow[0]"),
+        (spread(glowing("[0.5, nan, 0.2]")), "leds[0].end_glow[1]"),
+    ] {
+        let err = Sensor::from_toml("bad", &text)
+            .expect_err(field)
+            .to_string();
+        assert!(err.contains(field), "'{err}' does not name {field}");
+        assert!(!err.contains('\n'), "{err:?}");
+    }
+    let sensor = Sensor::from_toml("glow", &spread(glowing("[0.5, 0.0, 0.2]"))).unwrap();
+    assert_eq!(
+        sensor.lighting().leds[0].end_glow.to_array(),
+        [0.5, 0.0, 0.2]
+    );
+    let written = toml::to_string(&sensor.config).unwrap();
+    let again = Sensor::from_toml("again", &written).unwrap();
+    assert_eq!(again.config, sensor.config);
 }

@@ -318,6 +318,7 @@ fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
         tip_transmit: 0.3,
         rim_glow: 0.6,
         rim_width_mm: 1.5,
+        led_glow_deg: None,
     });
     let sensor = Sensor::from_config("small-shell-end", c).unwrap();
     let grid = render::HeightfieldGrid::for_sensor(&sensor);
@@ -341,6 +342,82 @@ fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
     let ring = sensor.principal + DVec2::new(sensor.lens.max_rho() * 0.98, 0.0);
     let (x, y) = (ring.x.round() as u32, ring.y.round() as u32);
     assert!(level(&with.frame, x, y).abs_diff(level(&without.frame, x, y)) <= 3);
+}
+
+/// The LEDs' own glow at a shell's end (`leds[*].end_glow`, `shell_end.led_glow_deg`): the
+/// shaders' end_glow against the CPU mirror, on the reference and four contacts; it tints
+/// the rim round each glowing LED and leaves the tip and the rest of the picture as they
+/// were, and an end without `led_glow_deg` renders as before.
+#[test]
+fn gpu_matches_the_cpu_pipeline_with_the_leds_glowing_at_a_shell_end() {
+    use geltip::sensor::{LedConfig, Leds, ShellEndConfig};
+    let mut c = small_sensor().config.clone();
+    let ring: Vec<LedConfig> = gel_ring(9, 40.0)
+        .into_iter()
+        .map(|l| LedConfig {
+            width_mm: Some(2.0),
+            widening: Some(0.4),
+            ..l
+        })
+        .collect();
+    c.leds = Leds::List(ring.clone());
+    let f = &c.finger;
+    let end = ShellEndConfig {
+        z_mm: f.cylinder_length_mm,
+        inner_radius_mm: 0.6 * f.radius_mm,
+        tip_colour: [0.02, 0.05, 0.1],
+        tip_transmit: 0.3,
+        rim_glow: 0.6,
+        rim_width_mm: 1.5,
+        led_glow_deg: Some(25.0),
+    };
+    c.shell_end = Some(end);
+    // Switched on but with no LED glowing: the same bytes as the plain end.
+    let on_but_dark = Sensor::from_config("small-end-dark", c.clone()).unwrap();
+    let mut plain_c = c.clone();
+    plain_c.shell_end = Some(ShellEndConfig {
+        led_glow_deg: None,
+        ..end
+    });
+    let plain = Sensor::from_config("small-end-plain", plain_c).unwrap();
+    let dark = cpu::render(&on_but_dark, None).unwrap();
+    let before = cpu::render(&plain, None).unwrap();
+    assert_eq!(dark.frame.rgba, before.frame.rgba);
+    // Two LEDs glow, in red and in blue (one dimmer in green).
+    let mut glowing = ring;
+    glowing[0].end_glow = [1.5, 0.0, 0.0];
+    glowing[4].end_glow = [0.0, -0.5, 2.0];
+    c.leds = Leds::List(glowing);
+    let sensor = Sensor::from_config("small-end-glow", c).unwrap();
+    let grid = render::HeightfieldGrid::for_sensor(&sensor);
+    let constants = render::uniforms::SensorUniform::new(&sensor, &grid).pipeline_constants();
+    assert!(constants.contains(&("END_GLOW", 1.0)));
+    gpu_matches_cpu(&sensor);
+    let with = cpu::render(&sensor, None).unwrap();
+    assert!(!close_enough(&diff(
+        &rgb(&with.frame),
+        &rgb(&before.frame),
+        3
+    )));
+    // Just outside the end's edge towards LED 0 (azimuth 0, image +x) red rises and blue
+    // does not; the tip (the centre) is as it was.
+    let pixel_at = |azimuth_deg: f64| {
+        let theta = (end.inner_radius_mm * 1.15).atan2(end.z_mm);
+        let rho = sensor.lens.project(theta);
+        let a = azimuth_deg.to_radians();
+        let p = sensor.principal + DVec2::new(rho * a.cos(), rho * a.sin());
+        (p.x.round() as u32, p.y.round() as u32)
+    };
+    let channel = |frame: &render::Frame, (x, y): (u32, u32), k: usize| {
+        frame.rgba[4 * (y * frame.width + x) as usize + k] as i32
+    };
+    let at = pixel_at(0.0);
+    assert!(channel(&with.frame, at, 0) >= channel(&before.frame, at, 0) + 10);
+    assert!((channel(&with.frame, at, 2) - channel(&before.frame, at, 2)).abs() <= 2);
+    let centre = (sensor.principal.x as u32, sensor.principal.y as u32);
+    for k in 0..3 {
+        assert!((channel(&with.frame, centre, k) - channel(&before.frame, centre, k)).abs() <= 1);
+    }
 }
 
 /// The camera's softness (`[camera] blur_px`): both renderers blur the same frames the same

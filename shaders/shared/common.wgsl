@@ -59,6 +59,8 @@ struct Sensor {
     led_colour: array<vec4<f32>, 16>,
     led_light: array<vec4<f32>, 16>,
     led_band: array<vec4<f32>, 16>,
+    // Per LED, its glow at a clear shell's open end, per channel (xyz; read when END_GLOW).
+    led_end_glow: array<vec4<f32>, 16>,
     // The camera: its colour matrix's rows (xyz) and one over each channel's gamma (xyz).
     colour_matrix: array<vec4<f32>, 3>,
     inverse_gamma: vec4<f32>,
@@ -77,6 +79,9 @@ struct Sensor {
     // How the ambient light shades with the skin's tilt, per channel (xyz; read when
     // AMBIENT_RELIEF).
     ambient_relief: vec4<f32>,
+    // x: one over the square of how far round the shell's end each LED's glow spreads
+    // (radians; read when END_GLOW).
+    shell_glow: vec4<f32>,
     // The elastomer kernels' normalised weights by tap |k| (x narrow, y wide).
     blend_weights: array<vec4<f32>, 65>,
 }
@@ -168,6 +173,9 @@ override CAMERA_RESPONSE: bool = false;
 // shell_end_light), and how sharp its edge is (mm; src/sensor/shell_end.rs SHELL_EDGE_MM).
 override SHELL_END: bool = false;
 override SHELL_EDGE_MM: f32 = 0.08;
+// Whether the LEDs tint the rim at the shell's end each round its azimuth
+// (shared/shading.wgsl shell_end_light).
+override END_GLOW: bool = false;
 // Whether the ambient light shades with the skin's tilt (shared/shading.wgsl ambient_light).
 override AMBIENT_RELIEF: bool = false;
 

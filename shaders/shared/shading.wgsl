@@ -79,9 +79,9 @@ fn ambient_light(place: GelPlace) -> vec3<f32> {
 }
 
 // The light `colour` of the skin a camera ray sees, past a clear shell's open end: through
-// the shell it brightens towards the end's edge; through the open end it is the tip's own
-// light plus the share of the LEDs' that reaches it. Mirror: src/render/leds.rs
-// shell_end_light.
+// the shell it brightens towards the end's edge (in each LED's tint round it when
+// END_GLOW); through the open end it is the tip's own light plus the share of the LEDs'
+// that reaches it. Mirror: src/render/leds.rs shell_end_light.
 fn shell_end_light(colour: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
     if ray.z <= 0.0 {
         return colour;
@@ -89,9 +89,35 @@ fn shell_end_light(colour: vec3<f32>, ray: vec3<f32>) -> vec3<f32> {
     let end = sensor.shell_end;
     let outside = end.x * length(ray.xy) / ray.z - end.y;
     let beyond = 1.0 / (1.0 + exp(clamp(outside / SHELL_EDGE_MM, -40.0, 40.0)));
-    let rim = 1.0 + end.z * exp(-max(outside, 0.0) / end.w);
+    let fade = exp(-max(outside, 0.0) / end.w);
+    var rim = vec3<f32>(1.0 + end.z * fade);
+    if END_GLOW {
+        rim = max(vec3<f32>(1.0) + (vec3<f32>(end.z) + end_glow(ray)) * fade, vec3<f32>(0.0));
+    }
     let scale = beyond * sensor.shell_tip.w + (1.0 - beyond) * rim;
     return colour * scale + sensor.shell_tip.xyz * beyond;
+}
+
+// The LEDs' own glow at the shell's end where `ray` crosses it, per channel: each LED's
+// end_glow weighted by a von Mises bump in azimuth about it, exp((cos turn - 1) / s^2).
+// Mirror: src/render/leds.rs end_glow.
+fn end_glow(ray: vec3<f32>) -> vec3<f32> {
+    let len = length(ray.xy);
+    if len <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let towards = ray.xy / len;
+    var glow = vec3<f32>(0.0);
+    for (var i = 0; i < LED_COUNT; i++) {
+        let led = sensor.led_position[i].xy;
+        let led_len = length(led);
+        var cos_turn = 0.0;
+        if led_len > 0.0 {
+            cos_turn = dot(towards, led / led_len);
+        }
+        glow += sensor.led_end_glow[i].xyz * exp((cos_turn - 1.0) * sensor.shell_glow.x);
+    }
+    return glow;
 }
 
 // Where a skin point lies for the gel's light, found once per pixel for every gel LED and the

@@ -4,7 +4,7 @@
 //! a coarse sample, the best polished on a fine one.
 
 use super::frames::SATURATED;
-use super::model::{Model, Samples};
+use super::model::{unclipped_level, Model, Samples};
 use super::solve::{invert, levenberg_marquardt, solve_dense, Fit};
 use crate::render::leds;
 use crate::sensor::Lighting;
@@ -38,9 +38,13 @@ pub struct EmptyFit {
 
 /// The residuals of `p` on `samples`, soft-L1 damped.
 pub fn residuals(model: &Model, samples: &Samples, p: &[f64]) -> Vec<f64> {
-    let predicted = model.predict(p, samples);
-    let mut out = Vec::with_capacity(samples.len() * 3);
-    for (pred, obs) in predicted.iter().zip(&samples.observed) {
+    robust(&model.predict(p, samples), &samples.observed)
+}
+
+/// The soft-L1 damped residuals of `predicted` levels against `observed` ones.
+fn robust(predicted: &[[f64; 3]], observed: &[[f64; 3]]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(observed.len() * 3);
+    for (pred, obs) in predicted.iter().zip(observed) {
         for c in 0..3 {
             let r = if obs[c] >= SATURATED {
                 (pred[c] - 255.0).min(0.0)
@@ -113,9 +117,18 @@ pub fn fit_empty(
     } else {
         polish_free(&model, fine, &best.params, &lens, polish_iterations)
     };
-    let fit = levenberg_marquardt(&from, &model.bounds(), polish_iterations, |q| {
-        residuals(&model, fine, q)
-    });
+    let fit = match model.layout().end_glow {
+        Some(g) => polish_with_end_glow(
+            &model,
+            fine,
+            &from,
+            g..g + 3 * model.leds + 1,
+            polish_iterations,
+        ),
+        None => levenberg_marquardt(&from, &model.bounds(), polish_iterations, |q| {
+            residuals(&model, fine, q)
+        }),
+    };
     EmptyFit {
         model,
         params: fit.params.clone(),
@@ -145,6 +158,139 @@ fn coarse_start(model: &Model, coarse: &Samples, rotation: f64) -> Start {
         rotation_deg: rotation,
         cost: fit.cost,
         params,
+    }
+}
+
+/// The polish where the LEDs glow at a shell's end (`glow`, their values), all values
+/// together. The glow only scales the light there, so a forward difference in it reuses the
+/// light before that scale, kept from the last full evaluation ([`GlowCache`]): its columns
+/// cost a fraction of the others'.
+fn polish_with_end_glow(
+    model: &Model,
+    samples: &Samples,
+    from: &[f64],
+    glow: std::ops::Range<usize>,
+    iterations: usize,
+) -> Fit {
+    let cache = GlowCache {
+        model,
+        samples,
+        glow,
+        kept: std::sync::RwLock::new(None),
+    };
+    levenberg_marquardt(from, &model.bounds(), iterations, |q| cache.residuals(q))
+}
+
+/// At each sample: the light before a shell end's scale, its vignetting gain and its ray;
+/// and each LED's weight in its glow there ([`leds::end_glow_weights`]), for `spread`.
+struct BareLight {
+    samples: Vec<Option<(DVec3, f64, DVec3)>>,
+    weights: Vec<f64>,
+    spread: Option<f64>,
+}
+
+/// Residuals of the model, keeping the light before the shell end's scale at the last
+/// parameters evaluated in full (a trial step's: they differ from the kept ones in more than
+/// one value outside `glow`; a forward difference moves one). Parameters that differ from
+/// the kept ones only at `glow` are evaluated on the kept light, exactly as in full.
+struct GlowCache<'a> {
+    model: &'a Model,
+    samples: &'a Samples,
+    glow: std::ops::Range<usize>,
+    kept: std::sync::RwLock<Option<(Vec<f64>, std::sync::Arc<BareLight>)>>,
+}
+
+impl GlowCache<'_> {
+    fn residuals(&self, q: &[f64]) -> Vec<f64> {
+        let differ = |kept: &[f64]| {
+            kept.iter()
+                .zip(q)
+                .enumerate()
+                .filter(|(i, (a, b))| !self.glow.contains(i) && a != b)
+                .count()
+        };
+        let kept = self.kept.read().ok().and_then(|k| k.clone());
+        let bare = match &kept {
+            Some((at, bare)) if differ(at) == 0 => bare.clone(),
+            _ => {
+                let bare = std::sync::Arc::new(self.bare_light(q));
+                if kept.as_ref().is_none_or(|(at, _)| differ(at) > 1) {
+                    if let Ok(mut k) = self.kept.write() {
+                        *k = Some((q.to_vec(), bare.clone()));
+                    }
+                }
+                bare
+            }
+        };
+        robust(&self.predict(q, &bare), &self.samples.observed)
+    }
+
+    fn bare_light(&self, q: &[f64]) -> BareLight {
+        let (model, d) = (self.model, self.model.decode(q));
+        let mut paint = model.start.config.paint.clone();
+        paint.specular = d.specular;
+        paint.shininess = d.shininess;
+        let bare = Lighting {
+            shell_end: None,
+            ..d.lighting.clone()
+        };
+        let spread = d.lighting.shell_end.and_then(|e| e.led_glow_deg);
+        let mut weights = Vec::with_capacity(self.samples.len() * d.lighting.leds.len());
+        let samples = (0..self.samples.len())
+            .map(|i| match model.hit(&d, self.samples, i) {
+                (Some((hit, place)), x) => {
+                    if let Some(spread) = spread {
+                        weights.extend(leds::end_glow_weights(&d.lighting.leds, spread, hit.ray));
+                    }
+                    Some((
+                        leds::shade_at(&bare, &paint, &hit, Some(&place)),
+                        d.lighting.vignette(x),
+                        hit.ray,
+                    ))
+                }
+                (None, _) => None,
+            })
+            .collect();
+        BareLight {
+            samples,
+            weights,
+            spread,
+        }
+    }
+
+    /// [`Model::predict`] from the light before the shell end's scale.
+    fn predict(&self, q: &[f64], bare: &BareLight) -> Vec<[f64; 3]> {
+        let d = self.model.decode(q);
+        let camera = d.lighting.camera;
+        let leds = &d.lighting.leds;
+        let mut weights = bare.weights.chunks_exact(leds.len().max(1));
+        bare.samples
+            .iter()
+            .map(|b| {
+                let Some((light, gain, ray)) = b else {
+                    return [0.0; 3];
+                };
+                let kept = match bare.spread {
+                    Some(_) => weights.next(),
+                    None => None,
+                };
+                let light = match &d.lighting.shell_end {
+                    Some(end) => {
+                        let glow = end.led_glow_deg.map(|spread| match kept {
+                            Some(w) if bare.spread == Some(spread) => {
+                                w.iter().zip(leds).map(|(w, led)| led.end_glow * *w).sum()
+                            }
+                            _ => leds::end_glow(leds, spread, *ray),
+                        });
+                        let (scale, beyond) = leds::shell_end_parts_glowing(end, glow, *ray);
+                        *light * scale + DVec3::from_array(end.tip_colour) * beyond
+                    }
+                    None => *light,
+                };
+                let m = camera.mix(light * *gain);
+                std::array::from_fn(|k| unclipped_level(m[k], camera.gamma[k]))
+            })
+            .collect()
     }
 }
 
@@ -218,12 +364,9 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
     let n = model.leds + 1;
     let gamma = d.lighting.camera.gamma;
     let l = model.layout();
-    // Each LED alone, white and of intensity 1, with no ambient light (and past a shell's
-    // end, none of the tip's own: it is added once, below).
-    let alone_end = d.lighting.shell_end.map(|e| crate::sensor::ShellEndConfig {
-        tip_colour: [0.0; 3],
-        ..e
-    });
+    // Each LED alone, white and of intensity 1, with no ambient light and no shell's end:
+    // past one, every LED's light and the ambient's pass through the same scale, found once
+    // with all the LEDs (their glow there tints it), and the tip's own light is added once.
     let alone: Vec<Lighting> = d
         .lighting
         .leds
@@ -235,30 +378,32 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
             }],
             ambient: DVec3::ZERO,
             paint_colour: DVec3::ONE,
-            shell_end: alone_end,
+            shell_end: None,
             ..d.lighting.clone()
         })
         .collect();
-    // Each LED's light alone and the ambient's at every sample (the vignetting's gain, and
-    // past a shell's end the scale every LED's and the ambient's light pass through), with
-    // the tip's own light (linear RGB, vignetted) it adds.
-    let basis: Vec<(Vec<f64>, DVec3)> = (0..samples.len())
+    // Each LED's light alone and the ambient's at every sample, per channel (the vignetting's
+    // gain and the shell end's scale), with the tip's own light (linear RGB, vignetted) it
+    // adds.
+    let basis: Vec<(Vec<DVec3>, DVec3)> = (0..samples.len())
         .map(|i| {
             let (hit, x) = model.hit(&d, samples, i);
             let gain = d.lighting.vignette(x);
             let Some((hit, place)) = hit else {
-                return (vec![0.0; n], DVec3::ZERO);
+                return (vec![DVec3::ZERO; n], DVec3::ZERO);
             };
             let (scale, tip) = match &d.lighting.shell_end {
                 Some(end) => {
-                    let (scale, beyond) = leds::shell_end_parts(end, hit.ray);
+                    let (scale, beyond) = leds::shell_end_parts(end, &d.lighting.leds, hit.ray);
                     (scale, DVec3::from_array(end.tip_colour) * beyond)
                 }
-                None => (1.0, DVec3::ZERO),
+                None => (DVec3::ONE, DVec3::ZERO),
             };
-            let mut row: Vec<f64> = alone
+            let mut row: Vec<DVec3> = alone
                 .iter()
-                .map(|light| leds::shade_at(light, &paint, &hit, Some(&place)).x * gain)
+                .map(|light| {
+                    DVec3::splat(leds::shade_at(light, &paint, &hit, Some(&place)).x) * scale * gain
+                })
                 .collect();
             row.push(gain * scale);
             (row, tip * gain)
@@ -300,9 +445,9 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
             let y = y[c];
             for i in 0..n {
                 for j in 0..n {
-                    ata[i * n + j] += row[i] * row[j];
+                    ata[i * n + j] += row[i][c] * row[j][c];
                 }
-                atb[i] += row[i] * y;
+                atb[i] += row[i][c] * y;
             }
         }
         for i in 0..n {
@@ -313,6 +458,65 @@ pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
                 p[k * l.per_led + l.colour + c] = x[k].max(0.0);
             }
             p[l.ambient + c] = x[model.leds].max(0.0);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensor::{LedKindName, Leds, Sensor};
+    use glam::DVec2;
+
+    /// The cached light gives the residuals a full evaluation gives, bit for bit, wherever
+    /// it is used (the glow moved alone) and wherever it is not (anything else moved).
+    #[test]
+    fn the_glow_cache_evaluates_exactly_as_the_model_does() {
+        let mut c = Sensor::preset("allsight").unwrap().config;
+        if let Some(end) = c.shell_end.as_mut() {
+            end.led_glow_deg = Some(25.0);
+        }
+        if let Leds::List(list) = &mut c.leds {
+            list[2].end_glow = [0.4, -0.2, 0.1];
+        }
+        let sensor = Sensor::from_config("glow", c).unwrap();
+        let pixels: Vec<(DVec2, [f64; 3])> = (0..400)
+            .map(|i| {
+                let (x, y) = (40.0 + (i % 20) as f64 * 20.0, 40.0 + (i / 20) as f64 * 20.0);
+                (DVec2::new(x, y), [90.0, 60.0 + (i % 7) as f64, 120.0])
+            })
+            .collect();
+        let samples = Samples::new(&sensor, &pixels);
+        let model = Model {
+            leds: 9,
+            kind: LedKindName::Gel,
+            camera: true,
+            ..Model::point(sensor, 9)
+        };
+        let g = model.layout().end_glow.expect("the glow is fitted");
+        let cache = GlowCache {
+            model: &model,
+            samples: &samples,
+            glow: g..g + 3 * model.leds + 1,
+            kept: std::sync::RwLock::new(None),
+        };
+        let p = model.initial(0.0);
+        assert_eq!(cache.residuals(&p), residuals(&model, &samples, &p));
+        let mut trial = p.clone();
+        for v in trial.iter_mut().take(g) {
+            *v *= 1.001;
+        }
+        assert_eq!(cache.residuals(&trial), residuals(&model, &samples, &trial));
+        for (i, step) in [(g + 4, 0.3), (g + 3 * model.leds, 5.0), (1, 0.05)] {
+            let mut q = trial.clone();
+            q[i] += step;
+            let full = residuals(&model, &samples, &q);
+            assert_eq!(cache.residuals(&q), full, "value {i}");
+            assert_ne!(
+                full,
+                residuals(&model, &samples, &trial),
+                "value {i} moves nothing"
+            );
         }
     }
 }

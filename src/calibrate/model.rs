@@ -52,6 +52,9 @@ pub struct Layout {
     /// own light (RGB), the share of the LEDs' reaching the tip, the rim's glow and width
     /// (mm). Its inner radius is held (the build's).
     pub shell_end: Option<usize>,
+    /// Each LED's glow at that end (RGB, by LED) and how far round it spreads (deg), when
+    /// the start's end has `led_glow_deg`.
+    pub end_glow: Option<usize>,
     pub len: usize,
 }
 
@@ -177,6 +180,7 @@ impl Model {
             .shell_end
             .is_some()
             .then(|| take(SHELL_END_VALUES));
+        let end_glow = self.fits_end_glow().then(|| take(3 * self.leds + 1));
         Layout {
             per_led,
             colour,
@@ -189,8 +193,18 @@ impl Model {
             principal,
             focal,
             shell_end,
+            end_glow,
             len: at,
         }
+    }
+
+    /// Whether the LEDs' glow at a shell's open end is fitted: when the start's end says
+    /// how far round it spreads.
+    pub fn fits_end_glow(&self) -> bool {
+        self.start
+            .config
+            .shell_end
+            .is_some_and(|e| e.led_glow_deg.is_some())
     }
 
     pub fn len(&self) -> usize {
@@ -272,6 +286,12 @@ impl Model {
                 ]
                 .map(String::from),
             );
+        }
+        if l.end_glow.is_some() {
+            for i in 0..self.leds {
+                out.extend((0..3).map(|k| format!("leds[{i}].end_glow[{k}]")));
+            }
+            out.push("shell_end.led_glow_deg".to_string());
         }
         out
     }
@@ -361,6 +381,12 @@ impl Model {
                 b(0.1, 2.0 * f.radius, 1e-4),
             ]);
         }
+        if l.end_glow.is_some() {
+            // Each LED's tint of the rim as bounded as the rim's own glow; spread over 5 to
+            // 120 degrees (narrower than the band of an LED, wider than a third of the ring).
+            out.extend((0..3 * self.leds).map(|_| b(-0.9, 10.0, 1e-5)));
+            out.push(b(5.0, 120.0, 1e-3));
+        }
         out
     }
 
@@ -390,6 +416,7 @@ impl Model {
                     spread: 2.0,
                     falloff_mm: 10.0,
                     kind: LedKind::Point,
+                    end_glow: DVec3::ZERO,
                 }
             };
             let azimuth = if keep_own {
@@ -450,6 +477,16 @@ impl Model {
             p.extend(end.tip_colour);
             p.extend([end.tip_transmit, end.rim_glow, end.rim_width_mm]);
         }
+        if let (Some(_), Some(end)) = (l.end_glow, &s.config.shell_end) {
+            for i in 0..self.leds {
+                let glow = match (keep_own, own.get(i)) {
+                    (true, Some(led)) => led.end_glow,
+                    _ => DVec3::ZERO,
+                };
+                p.extend(glow.to_array());
+            }
+            p.push(end.led_glow_deg.unwrap_or(30.0));
+        }
         p
     }
 
@@ -482,6 +519,9 @@ impl Model {
                 let v = &p[i * l.per_led..(i + 1) * l.per_led];
                 let a = v[0].to_radians();
                 let colour = DVec3::from_slice(&v[l.colour..l.colour + 3]);
+                let end_glow = l.end_glow.map_or(DVec3::ZERO, |g| {
+                    DVec3::from_slice(&p[g + 3 * i..g + 3 * i + 3])
+                });
                 match (self.kind, band) {
                     (LedKindName::Gel, Some((band, z))) => Led {
                         position: DVec3::new(ring * a.cos(), ring * a.sin(), z),
@@ -490,6 +530,7 @@ impl Model {
                         spread: 0.0,
                         falloff_mm: 1.0,
                         kind: LedKind::Gel(band),
+                        end_glow,
                     },
                     _ => Led {
                         position: DVec3::new(v[2] * a.cos(), v[2] * a.sin(), v[1]),
@@ -498,6 +539,7 @@ impl Model {
                         spread: v[6],
                         falloff_mm: v[7],
                         kind: LedKind::Point,
+                        end_glow,
                     },
                 }
             })
@@ -535,6 +577,9 @@ impl Model {
                         tip_transmit: p[i + 4],
                         rim_glow: p[i + 5],
                         rim_width_mm: p[i + 6],
+                        led_glow_deg: l
+                            .end_glow
+                            .map_or(end.led_glow_deg, |g| Some(p[g + 3 * self.leds])),
                         ..end
                     })
                 }),
@@ -647,6 +692,7 @@ impl Model {
                         azimuth_deg: azimuth.rem_euclid(360.0),
                         z_mm: led.position.z,
                         intensity,
+                        end_glow: led.end_glow.to_array(),
                         ..LedConfig::new(colour, 0.0)
                     };
                     match led.kind {
@@ -698,6 +744,6 @@ pub fn kind_name(kind: LedKind) -> LedKindName {
 
 /// 255 x^(1/gamma) of a linear value, not clipped above (a fit sees how far past full scale
 /// a prediction lies).
-fn unclipped_level(linear: f64, gamma: f64) -> f64 {
+pub(super) fn unclipped_level(linear: f64, gamma: f64) -> f64 {
     255.0 * linear.max(0.0).powf(1.0 / gamma)
 }

@@ -9,7 +9,7 @@ use super::camera::SkinHit;
 use crate::finger::Finger;
 use crate::sensor::shell_end::SHELL_EDGE_MM;
 use crate::sensor::{
-    CameraConfig, GelSpread, LedKind, Lighting, PaintConfig, Sensor, ShellEndConfig,
+    CameraConfig, GelSpread, Led, LedKind, Lighting, PaintConfig, Sensor, ShellEndConfig,
 };
 use glam::{DVec2, DVec3};
 
@@ -68,30 +68,78 @@ pub fn shade_at(
             * (led.intensity * falloff * (paint.diffuse * lambert + paint.specular * spec));
     }
     if let Some(end) = &light.shell_end {
-        colour = shell_end_light(end, colour, hit.ray);
+        colour = shell_end_light(end, &light.leds, colour, hit.ray);
     }
     colour * light.paint_colour
 }
 
 /// The light `colour` of the skin a camera ray `ray` sees, past a clear shell's open end
-/// ([`ShellEndConfig`]): through the shell it brightens towards the end's edge; through the
-/// open end it is the tip's own light plus the share of the LEDs' that reaches it.
-pub fn shell_end_light(end: &ShellEndConfig, colour: DVec3, ray: DVec3) -> DVec3 {
-    let (scale, beyond) = shell_end_parts(end, ray);
+/// ([`ShellEndConfig`]): through the shell it brightens towards the end's edge (in each
+/// LED's tint round it, when `leds` glow there); through the open end it is the tip's own
+/// light plus the share of the LEDs' that reaches it.
+pub fn shell_end_light(end: &ShellEndConfig, leds: &[Led], colour: DVec3, ray: DVec3) -> DVec3 {
+    let (scale, beyond) = shell_end_parts(end, leds, ray);
     colour * scale + DVec3::from_array(end.tip_colour) * beyond
 }
 
-/// [`shell_end_light`] as colour x scale + tip_colour x beyond: (scale, beyond), beyond the
-/// share of the ray that passes the open end. A ray that never rises to the end's plane
-/// passes through the shell far from its edge.
-pub fn shell_end_parts(end: &ShellEndConfig, ray: DVec3) -> (f64, f64) {
+/// [`shell_end_light`] as colour x scale + tip_colour x beyond: (scale per channel, beyond),
+/// beyond the share of the ray that passes the open end. A ray that never rises to the
+/// end's plane passes through the shell far from its edge.
+pub fn shell_end_parts(end: &ShellEndConfig, leds: &[Led], ray: DVec3) -> (DVec3, f64) {
+    let glow = end.led_glow_deg.map(|spread| end_glow(leds, spread, ray));
+    shell_end_parts_glowing(end, glow, ray)
+}
+
+/// [`shell_end_parts`] with the LEDs' [`end_glow`] where the ray crosses the end already
+/// known (`None` when the end has no `led_glow_deg`).
+pub fn shell_end_parts_glowing(
+    end: &ShellEndConfig,
+    glow: Option<DVec3>,
+    ray: DVec3,
+) -> (DVec3, f64) {
     if ray.z <= 0.0 {
-        return (1.0, 0.0);
+        return (DVec3::ONE, 0.0);
     }
     let outside = end.z_mm * ray.truncate().length() / ray.z - end.inner_radius_mm;
     let beyond = 1.0 / (1.0 + (outside / SHELL_EDGE_MM).clamp(-40.0, 40.0).exp());
-    let rim = 1.0 + end.rim_glow * (-outside.max(0.0) / end.rim_width_mm).exp();
-    (beyond * end.tip_transmit + (1.0 - beyond) * rim, beyond)
+    let fade = (-outside.max(0.0) / end.rim_width_mm).exp();
+    let rim = match glow {
+        Some(glow) => (DVec3::ONE + (DVec3::splat(end.rim_glow) + glow) * fade).max(DVec3::ZERO),
+        None => DVec3::splat(1.0 + end.rim_glow * fade),
+    };
+    (
+        DVec3::splat(beyond * end.tip_transmit) + (1.0 - beyond) * rim,
+        beyond,
+    )
+}
+
+/// The LEDs' own glow at the shell's end where `ray` crosses it, per channel: each LED's
+/// `end_glow` weighted by a von Mises bump in azimuth about it, exp((cos turn - 1) / s^2),
+/// s the spread in radians (a Gaussian of standard deviation s near the LED; periodic, and
+/// found from the directions' dot product alone).
+pub fn end_glow(leds: &[Led], spread_deg: f64, ray: DVec3) -> DVec3 {
+    end_glow_weights(leds, spread_deg, ray)
+        .zip(leds)
+        .map(|(w, led)| led.end_glow * w)
+        .sum()
+}
+
+/// Each LED's weight in [`end_glow`] where `ray` crosses the end (0 for a ray along the
+/// axis).
+pub fn end_glow_weights(
+    leds: &[Led],
+    spread_deg: f64,
+    ray: DVec3,
+) -> impl Iterator<Item = f64> + '_ {
+    let towards = ray.truncate().try_normalize();
+    let concentration = spread_deg.to_radians().powi(-2);
+    leds.iter().map(move |led| match towards {
+        Some(towards) => {
+            let cos_turn = towards.dot(led.position.truncate().normalize_or_zero());
+            ((cos_turn - 1.0) * concentration).exp()
+        }
+        _ => 0.0,
+    })
 }
 
 /// Where a skin point lies for the gel's light: its azimuth about the axis, its latitude

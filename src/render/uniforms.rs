@@ -57,6 +57,8 @@ pub struct SensorUniform {
     pub led_colour: [[f32; 4]; MAX_LEDS],
     pub led_light: [[f32; 4]; MAX_LEDS],
     pub led_band: [[f32; 4]; MAX_LEDS],
+    /// Each LED's glow at a clear shell's open end, per channel (xyz; w unused).
+    pub led_end_glow: [[f32; 4]; MAX_LEDS],
     /// The camera's colour matrix by row (xyz; w unused) and one over its gamma by channel
     /// (xyz; w unused).
     pub colour_matrix: [[f32; 4]; 3],
@@ -78,6 +80,10 @@ pub struct SensorUniform {
     /// How the ambient light shades with the skin's tilt, per channel (xyz; w unused; the
     /// pipeline constant AMBIENT_RELIEF says whether it does).
     pub ambient_relief: [f32; 4],
+    /// x: how tightly each LED's glow keeps to its azimuth at the shell's end, one over the
+    /// square of its spread (radians; the pipeline constant END_GLOW says whether the LEDs
+    /// glow there); yzw unused.
+    pub shell_glow: [f32; 4],
     /// The elastomer kernels' normalised weights by tap (x narrow, y wide; zw unused):
     /// [`super::elastomer::blend_weights`].
     pub blend_weights: [[f32; 4]; BLEND_WEIGHTS],
@@ -87,7 +93,7 @@ pub struct SensorUniform {
 pub const BLEND_WEIGHTS: usize = super::elastomer::MAX_BLEND_TAPS as usize + 1;
 
 const _: () =
-    assert!(std::mem::size_of::<SensorUniform>() == 336 + 4 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
+    assert!(std::mem::size_of::<SensorUniform>() == 352 + 5 * 16 * MAX_LEDS + 16 * BLEND_WEIGHTS);
 
 /// WGSL `Frame`: one contact.
 #[repr(C)]
@@ -154,7 +160,7 @@ impl SensorUniform {
     pub fn new(sensor: &Sensor, grid: &HeightfieldGrid) -> Self {
         let c = &sensor.config;
         let light = sensor.lighting();
-        let mut leds = [[[0.0f32; 4]; MAX_LEDS]; 4];
+        let mut leds = [[[0.0f32; 4]; MAX_LEDS]; 5];
         for (i, l) in light.leds.iter().enumerate() {
             let gel = match l.kind {
                 LedKind::Point => None,
@@ -162,6 +168,7 @@ impl SensorUniform {
             };
             leds[0][i] = vec4(l.position, if gel.is_some() { 1.0 } else { 0.0 });
             leds[1][i] = vec4(l.colour, 0.0);
+            leds[4][i] = vec4(l.end_glow, 0.0);
             leds[2][i] = [
                 l.intensity as f32,
                 l.spread as f32,
@@ -235,6 +242,7 @@ impl SensorUniform {
             led_colour: leds[1],
             led_light: leds[2],
             led_band: leds[3],
+            led_end_glow: leds[4],
             colour_matrix: camera.colour_matrix.map(row),
             inverse_gamma: row(camera.gamma.map(|g| 1.0 / g)),
             gel_leds: light.has_gel_leds() as u32,
@@ -257,6 +265,15 @@ impl SensorUniform {
                 [r, g, b, e.tip_transmit as f32]
             }),
             ambient_relief: vec4(light.ambient_relief, 0.0),
+            shell_glow: [
+                light
+                    .shell_end
+                    .and_then(|e| e.led_glow_deg)
+                    .map_or(0.0, |d| d.to_radians().powi(-2) as f32),
+                0.0,
+                0.0,
+                0.0,
+            ],
             blend_weights,
         }
     }
@@ -264,7 +281,7 @@ impl SensorUniform {
     /// Values of the shaders' pipeline-overridable constants (`shared/common.wgsl`): the
     /// fields that shape control flow, and the shading's exponents, fixed per sensor so the
     /// driver can fold the lens switch, unroll the loops and multiply whole powers out.
-    pub fn pipeline_constants(&self) -> [(&'static str, f64); 14] {
+    pub fn pipeline_constants(&self) -> [(&'static str, f64); 15] {
         // Nested exactly as the shader steps them: the wide step twice the narrow one in f32.
         let nested = self.wide_step_mm == 2.0 * self.narrow_step_mm;
         [
@@ -288,6 +305,7 @@ impl SensorUniform {
             ("CAMERA_RESPONSE", self.camera_response as f64),
             ("SHELL_END", self.has_shell_end as f64),
             ("SHELL_EDGE_MM", crate::sensor::shell_end::SHELL_EDGE_MM),
+            ("END_GLOW", if self.shell_glow[0] > 0.0 { 1.0 } else { 0.0 }),
             (
                 "AMBIENT_RELIEF",
                 if self.ambient_relief[..3] == [0.0; 3] {

@@ -365,6 +365,17 @@ impl SensorConfig {
         if let Some(end) = &self.shell_end {
             end.validate(f.radius_mm, f.cylinder_length_mm + f.radius_mm)?;
         }
+        if let Leds::List(list) = &self.leds {
+            let spread_set = self.shell_end.is_some_and(|e| e.led_glow_deg.is_some());
+            if let Some(i) = list.iter().position(|l| l.end_glow != [0.0; 3]) {
+                if !spread_set {
+                    return Err(GeltipError::config(
+                        format!("leds[{i}].end_glow"),
+                        "needs a [shell_end] with led_glow_deg (how far round the end it spreads)",
+                    ));
+                }
+            }
+        }
         for (k, c) in self.paint.colour.iter().enumerate() {
             non_negative(&format!("paint.colour[{k}]"), *c)?;
         }

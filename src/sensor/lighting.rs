@@ -129,6 +129,16 @@ pub struct LedConfig {
     /// by max(0, 1 + relief n.t), n the skin's normal, t the way up the finger.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relief: Option<f64>,
+    /// How much brighter, per channel, this LED makes the skin seen just outside a clear
+    /// shell's open end round its azimuth: the light it sends up the shell leaving the end
+    /// in its own tint. Added to `[shell_end]`'s `rim_glow` there, spread round the end over
+    /// `shell_end.led_glow_deg`; needs that set. Default none.
+    #[serde(default, skip_serializing_if = "is_zero3")]
+    pub end_glow: [f64; 3],
+}
+
+fn is_zero3(v: &[f64; 3]) -> bool {
+    *v == [0.0; 3]
 }
 
 impl LedConfig {
@@ -148,6 +158,7 @@ impl LedConfig {
             widening: None,
             attenuation_mm: None,
             relief: None,
+            end_glow: [0.0; 3],
         }
     }
 
@@ -321,6 +332,9 @@ pub struct Led {
     pub spread: f64,
     pub falloff_mm: f64,
     pub kind: LedKind,
+    /// Per channel, the rim glow this LED adds round its azimuth at a clear shell's open
+    /// end ([`LedConfig::end_glow`]).
+    pub end_glow: DVec3,
 }
 
 /// A sensor's light, resolved from either form of the file: what shading needs.
@@ -452,6 +466,11 @@ impl Lighting {
         self.ambient_relief != DVec3::ZERO
     }
 
+    /// Whether any LED glows at a clear shell's open end ([`Led::end_glow`]).
+    pub fn has_end_glow(&self) -> bool {
+        self.leds.iter().any(|l| l.end_glow != DVec3::ZERO)
+    }
+
     /// The spread every LED shares, if they share one.
     pub fn shared_spread(&self) -> Option<f64> {
         let first = self.leds.first()?.spread;
@@ -484,6 +503,7 @@ impl Leds {
                             spread: c.spread,
                             falloff_mm: c.falloff_mm,
                             kind: LedKind::Point,
+                            end_glow: DVec3::ZERO,
                         }
                     })
                     .collect()
@@ -503,6 +523,7 @@ impl Leds {
                             LedKindName::Point => LedKind::Point,
                             LedKindName::Gel => LedKind::Gel(l.gel_spread()),
                         },
+                        end_glow: DVec3::from_array(l.end_glow),
                     }
                 })
                 .collect(),
@@ -557,6 +578,16 @@ impl Leds {
                     non_negative(&field("spread"), l.spread)?;
                     finite_positive(&field("falloff_mm"), l.falloff_mm)?;
                     validate_gel(l, &field)?;
+                    for (k, g) in l.end_glow.iter().enumerate() {
+                        let field = format!("leds[{i}].end_glow[{k}]");
+                        finite(&field, *g)?;
+                        if *g <= -1.0 {
+                            return Err(GeltipError::config(
+                                field,
+                                format!("must be above -1, got {g}"),
+                            ));
+                        }
+                    }
                 }
                 Ok(())
             }

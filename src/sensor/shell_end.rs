@@ -33,6 +33,11 @@ pub struct ShellEndConfig {
     /// the ray's distance outside the edge in the end's plane (> -1).
     pub rim_glow: f64,
     pub rim_width_mm: f64,
+    /// How far round the end each LED's own glow spreads (degrees, one standard deviation
+    /// of a Gaussian in azimuth about the LED's): set, each LED's `end_glow` tints the rim
+    /// per channel; unset, the rim's glow is the same all round and in every channel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub led_glow_deg: Option<f64>,
 }
 
 impl ShellEndConfig {
@@ -73,7 +78,17 @@ impl ShellEndConfig {
                 ),
             ));
         }
-        finite_positive("shell_end.rim_width_mm", self.rim_width_mm)
+        finite_positive("shell_end.rim_width_mm", self.rim_width_mm)?;
+        if let Some(spread) = self.led_glow_deg {
+            finite_positive("shell_end.led_glow_deg", spread)?;
+            if spread > 180.0 {
+                return Err(GeltipError::config(
+                    "shell_end.led_glow_deg",
+                    format!("must be at most 180, got {spread}"),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -89,13 +104,14 @@ mod tests {
             tip_transmit: 0.5,
             rim_glow: 0.3,
             rim_width_mm: 2.0,
+            led_glow_deg: Some(30.0),
         }
     }
 
     #[test]
     fn a_sound_end_passes_and_each_bad_field_is_named() {
         end().validate(12.9, 27.3).unwrap();
-        let cases: [(&str, ShellEndConfig); 6] = [
+        let cases: [(&str, ShellEndConfig); 8] = [
             (
                 "shell_end.z_mm",
                 ShellEndConfig {
@@ -135,6 +151,20 @@ mod tests {
                 "shell_end.rim_width_mm",
                 ShellEndConfig {
                     rim_width_mm: 0.0,
+                    ..end()
+                },
+            ),
+            (
+                "shell_end.led_glow_deg",
+                ShellEndConfig {
+                    led_glow_deg: Some(0.0),
+                    ..end()
+                },
+            ),
+            (
+                "shell_end.led_glow_deg",
+                ShellEndConfig {
+                    led_glow_deg: Some(200.0),
                     ..end()
                 },
             ),

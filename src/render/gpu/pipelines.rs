@@ -57,14 +57,14 @@ pub(super) struct Pipelines {
     lens_rays: Option<wgpu::ComputePipeline>,
     /// What the lazily built pipelines are built with.
     layout: wgpu::PipelineLayout,
-    constants: [(&'static str, f64); 14],
+    constants: [(&'static str, f64); 15],
 }
 
 impl Pipelines {
     pub fn new(
         ctx: &GpuContext,
         layout: &wgpu::PipelineLayout,
-        constants: [(&'static str, f64); 14],
+        constants: [(&'static str, f64); 15],
     ) -> Result<Pipelines> {
         let p = |stage: &str, entry: &str| {
             create_compute_pipeline_with(ctx, stage, entry, Some(layout), &constants)
