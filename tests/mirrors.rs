@@ -297,29 +297,10 @@ fn gpu_matches_the_cpu_pipeline_under_an_ambient_that_shades_with_tilt() {
 /// darkens the tip it is given and leaves a sensor without one as it was.
 #[test]
 fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
-    use geltip::sensor::{LedConfig, Leds, ShellEndConfig};
     let mut c = small_sensor().config.clone();
-    c.leds = Leds::List(
-        gel_ring(9, 40.0)
-            .into_iter()
-            .map(|l| LedConfig {
-                width_mm: Some(2.0),
-                widening: Some(0.4),
-                ..l
-            })
-            .collect(),
-    );
+    c.leds = geltip::sensor::Leds::List(narrow_gel_ring());
     let plain = Sensor::from_config("small-gel", c.clone()).unwrap();
-    let f = &c.finger;
-    c.shell_end = Some(ShellEndConfig {
-        z_mm: f.cylinder_length_mm,
-        inner_radius_mm: 0.6 * f.radius_mm,
-        tip_colour: [0.02, 0.05, 0.1],
-        tip_transmit: 0.3,
-        rim_glow: 0.6,
-        rim_width_mm: 1.5,
-        led_glow_deg: None,
-    });
+    c.shell_end = Some(small_shell_end(&c, None));
     let sensor = Sensor::from_config("small-shell-end", c).unwrap();
     let grid = render::HeightfieldGrid::for_sensor(&sensor);
     let constants = render::uniforms::SensorUniform::new(&sensor, &grid).pipeline_constants();
@@ -350,27 +331,11 @@ fn gpu_matches_the_cpu_pipeline_past_a_shell_end() {
 /// were, and an end without `led_glow_deg` renders as before.
 #[test]
 fn gpu_matches_the_cpu_pipeline_with_the_leds_glowing_at_a_shell_end() {
-    use geltip::sensor::{LedConfig, Leds, ShellEndConfig};
+    use geltip::sensor::{Leds, ShellEndConfig};
     let mut c = small_sensor().config.clone();
-    let ring: Vec<LedConfig> = gel_ring(9, 40.0)
-        .into_iter()
-        .map(|l| LedConfig {
-            width_mm: Some(2.0),
-            widening: Some(0.4),
-            ..l
-        })
-        .collect();
+    let ring = narrow_gel_ring();
     c.leds = Leds::List(ring.clone());
-    let f = &c.finger;
-    let end = ShellEndConfig {
-        z_mm: f.cylinder_length_mm,
-        inner_radius_mm: 0.6 * f.radius_mm,
-        tip_colour: [0.02, 0.05, 0.1],
-        tip_transmit: 0.3,
-        rim_glow: 0.6,
-        rim_width_mm: 1.5,
-        led_glow_deg: Some(25.0),
-    };
+    let end = small_shell_end(&c, Some(25.0));
     c.shell_end = Some(end);
     // Switched on but with no LED glowing: the same bytes as the plain end.
     let on_but_dark = Sensor::from_config("small-end-dark", c.clone()).unwrap();
@@ -449,6 +414,35 @@ fn gel_ring(count: usize, step_deg: f64) -> Vec<geltip::sensor::LedConfig> {
             )
         })
         .collect()
+}
+
+/// Nine gel LEDs 40 degrees apart with narrow bands that widen fast.
+fn narrow_gel_ring() -> Vec<geltip::sensor::LedConfig> {
+    gel_ring(9, 40.0)
+        .into_iter()
+        .map(|l| geltip::sensor::LedConfig {
+            width_mm: Some(2.0),
+            widening: Some(0.4),
+            ..l
+        })
+        .collect()
+}
+
+/// A clear shell ending at the hemisphere's base of the finger of `c`, its LEDs glowing
+/// there over `led_glow_deg` when given.
+fn small_shell_end(
+    c: &geltip::sensor::SensorConfig,
+    led_glow_deg: Option<f64>,
+) -> geltip::sensor::ShellEndConfig {
+    geltip::sensor::ShellEndConfig {
+        z_mm: c.finger.cylinder_length_mm,
+        inner_radius_mm: 0.6 * c.finger.radius_mm,
+        tip_colour: [0.02, 0.05, 0.1],
+        tip_transmit: 0.3,
+        rim_glow: 0.6,
+        rim_width_mm: 1.5,
+        led_glow_deg,
+    }
 }
 
 fn gpu_matches_cpu(sensor: &Sensor) {
