@@ -506,6 +506,7 @@ fn uniform_structs_equal_the_shaders() {
         member!(S, led_colour),
         member!(S, led_light),
         member!(S, led_band),
+        member!(S, led_end_glow),
         member!(S, colour_matrix),
         member!(S, inverse_gamma),
         member!(S, gel_leds),
@@ -516,6 +517,7 @@ fn uniform_structs_equal_the_shaders() {
         member!(S, shell_end),
         member!(S, shell_tip),
         member!(S, ambient_relief),
+        member!(S, shell_glow),
         member!(S, blend_weights),
     ];
     let frame = vec![
