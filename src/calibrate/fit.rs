@@ -34,6 +34,9 @@ pub struct EmptyFit {
     pub fit: Fit,
     /// Every start tried, with the cost it reached on the coarse sample.
     pub starts: Vec<Start>,
+    /// The values fitted, when not all of them (the rest held at the start's); `fit` is
+    /// then over these alone.
+    pub only: Option<std::ops::Range<usize>>,
 }
 
 /// The residuals of `p` on `samples`, soft-L1 damped.
@@ -134,7 +137,48 @@ pub fn fit_empty(
         params: fit.params.clone(),
         fit,
         starts,
+        only: None,
     }
+}
+
+/// The LEDs' glow at a shell's end fitted alone over the start's light (`--fit glow`): every
+/// other value held at the start's, each evaluation on the light kept before the end's
+/// scale. `None` when the model does not fit a glow (the start's end sets no spread).
+pub fn fit_end_glow(model: &Model, samples: &Samples, iterations: usize) -> Option<EmptyFit> {
+    let g = model.layout().end_glow?;
+    let glow = g..g + 3 * model.leds + 1;
+    let from = model.initial(0.0);
+    let cache = GlowCache {
+        model,
+        samples,
+        glow: glow.clone(),
+        kept: std::sync::RwLock::new(None),
+    };
+    let expand = |q: &[f64]| {
+        let mut full = from.clone();
+        full[glow.clone()].copy_from_slice(q);
+        full
+    };
+    let bounds = model.bounds();
+    let fit = levenberg_marquardt(
+        &from[glow.clone()],
+        &bounds[glow.clone()],
+        iterations,
+        |q| cache.residuals(&expand(q)),
+    );
+    let params = expand(&fit.params);
+    Some(EmptyFit {
+        model: model.clone(),
+        starts: vec![Start {
+            leds: model.leds,
+            rotation_deg: 0.0,
+            cost: fit.cost,
+            params: params.clone(),
+        }],
+        params,
+        fit,
+        only: Some(glow),
+    })
 }
 
 /// A coarse fit from the LEDs rotated by `rotation`: their places, spreads and fall-offs,

@@ -69,6 +69,9 @@ pub struct FitSet {
     pub geometry: bool,
     /// The imprint's elastomer values, from the frames with known contacts.
     pub imprint: bool,
+    /// The LEDs' glow at a clear shell's open end alone, over the start's light (its
+    /// `[shell_end]` must set `led_glow_deg`; the light fit fits the glow with the rest).
+    pub glow: bool,
 }
 
 impl Default for FitSet {
@@ -83,12 +86,13 @@ impl Default for FitSet {
             camera: false,
             geometry: false,
             imprint: true,
+            glow: false,
         }
     }
 }
 
 impl FitSet {
-    pub const PARTS: [&'static str; 7] = [
+    pub const PARTS: [&'static str; 8] = [
         "lens",
         "principal",
         "focal",
@@ -96,6 +100,7 @@ impl FitSet {
         "camera",
         "geometry",
         "imprint",
+        "glow",
     ];
 
     /// Nothing fitted.
@@ -107,6 +112,7 @@ impl FitSet {
         camera: false,
         geometry: false,
         imprint: false,
+        glow: false,
     };
 
     /// Parses a comma-separated list of [`FitSet::PARTS`] (`"light,lens"`).
@@ -121,6 +127,7 @@ impl FitSet {
                 "camera" => set.camera = true,
                 "geometry" => set.geometry = true,
                 "imprint" => set.imprint = true,
+                "glow" => set.glow = true,
                 other => {
                     return Err(GeltipError::option(
                         "fit",
@@ -153,6 +160,12 @@ impl FitSet {
                 "the camera, the geometry, the principal point and the focal length are fitted with the light; add light",
             ));
         }
+        if self.glow && self.light {
+            return Err(GeltipError::option(
+                "fit",
+                "the light fit fits the glow too where the start sets led_glow_deg; glow alone fits it over the start's light",
+            ));
+        }
         if (self.principal || self.focal) && !self.lens {
             return Err(GeltipError::option(
                 "fit",
@@ -172,6 +185,7 @@ impl FitSet {
             self.camera,
             self.geometry,
             self.imprint,
+            self.glow,
         ];
         FitSet::PARTS
             .iter()
@@ -277,23 +291,29 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
     } else {
         Vec::new()
     };
-    let (mut config, leds, fit_cost, fit_iterations, starts, at_bounds) = if options.fit.light {
-        progress("fitting the light");
-        let fitted = fit_light(options, &lensed, &frames, &circle, reach)?;
-        let model = &fitted.model;
-        values.extend(light_values(&fitted));
-        (
-            model.config(&fitted.params),
-            model.leds,
-            fitted.fit.cost,
-            fitted.fit.iterations,
-            fitted.starts.clone(),
-            at_bounds(&fitted),
-        )
-    } else {
-        let leds = lensed.lighting().leds.len();
-        (lensed.config.clone(), leds, 0.0, 0, Vec::new(), Vec::new())
-    };
+    let (mut config, leds, fit_cost, fit_iterations, starts, at_bounds) =
+        if options.fit.light || options.fit.glow {
+            let fitted = if options.fit.light {
+                progress("fitting the light");
+                fit_light(options, &lensed, &frames, &circle, reach)?
+            } else {
+                progress("fitting the LEDs' glow at the shell's end");
+                fit_glow(options, &lensed, &frames, &circle)?
+            };
+            let model = &fitted.model;
+            values.extend(light_values(&fitted));
+            (
+                model.config(&fitted.params),
+                model.leds,
+                fitted.fit.cost,
+                fitted.fit.iterations,
+                fitted.starts.clone(),
+                at_bounds(&fitted),
+            )
+        } else {
+            let leds = lensed.lighting().leds.len();
+            (lensed.config.clone(), leds, 0.0, 0, Vec::new(), Vec::new())
+        };
     let mut unconstrained = unconstrained_values(&values);
     unconstrained.push(
         "paint.colour, paint.diffuse: an empty frame shows the LEDs' light times the paint's; \
@@ -410,6 +430,38 @@ fn fit_light(
     Ok(fit::fit_empty(&models, &coarse, &fine, &rotations, 200))
 }
 
+/// The LEDs' glow at the shell's end fitted alone over the `lensed` sensor's light
+/// (`--fit glow`).
+fn fit_glow(
+    options: &Options,
+    lensed: &Sensor,
+    frames: &EmptyFrames,
+    circle: &ImageCircle,
+) -> Result<fit::EmptyFit> {
+    let Some((kind, leds)) = listed_leds(lensed) else {
+        return Err(GeltipError::option(
+            "fit",
+            "glow needs a start sensor that lists its LEDs ([[leds]], all of one kind)",
+        ));
+    };
+    let model = Model {
+        start: lensed.clone(),
+        leds,
+        kind,
+        camera: false,
+        geometry: false,
+        principal: None,
+        focal: None,
+    };
+    let fine = sample(lensed, frames, circle, options.samples);
+    fit::fit_end_glow(&model, &fine, 200).ok_or_else(|| {
+        GeltipError::option(
+            "fit",
+            "glow needs the start sensor's [shell_end] with led_glow_deg (how far round the end each LED's glow spreads)",
+        )
+    })
+}
+
 /// The kind and number of the LEDs the sensor file lists (`[[leds]]`, all of one kind), or
 /// `None` for the ring or a mixed list.
 fn listed_leds(sensor: &Sensor) -> Option<(LedKindName, usize)> {
@@ -425,13 +477,16 @@ fn listed_leds(sensor: &Sensor) -> Option<(LedKindName, usize)> {
 /// The fitted values that ended on their box's edge.
 fn at_bounds(fitted: &fit::EmptyFit) -> Vec<AtBound> {
     let bounds = fitted.model.bounds();
+    let fitted_here = |i: &usize| fitted.only.as_ref().is_none_or(|r| r.contains(i));
     fitted
         .model
         .names()
         .into_iter()
         .zip(&fitted.params)
         .zip(bounds)
-        .filter_map(|((name, &value), b)| {
+        .enumerate()
+        .filter(|(i, _)| fitted_here(i))
+        .filter_map(|(_, ((name, &value), b))| {
             let tol = 1e-6 * (b.hi - b.lo).abs().max(1e-9);
             let side = if value <= b.lo + tol {
                 "lower"
@@ -463,11 +518,11 @@ fn held_lens(start: &Sensor, frames: &EmptyFrames) -> Result<Sensor> {
 /// The light's fitted values, named as the model names them, with their standard errors.
 fn light_values(fitted: &fit::EmptyFit) -> Vec<Value> {
     let errors = fitted.fit.standard_errors();
-    fitted
-        .model
-        .names()
-        .into_iter()
-        .zip(&fitted.params)
+    let range = fitted.only.clone().unwrap_or(0..fitted.params.len());
+    fitted.model.names()[range.clone()]
+        .iter()
+        .cloned()
+        .zip(&fitted.params[range])
         .zip(errors)
         .map(|((name, value), std_error)| Value {
             name,

@@ -37,8 +37,9 @@ pub struct CalibrateArgs {
     /// What to fit, comma-separated, of lens (from the image circle, kept as the mask),
     /// principal and focal (the lens's principal point and focal length fitted to the light,
     /// where the circle is a mask), light, camera (colour matrix and gamma), geometry (the
-    /// finger's length) and imprint (from --contacts); the rest is held at the start
-    /// sensor's values.
+    /// finger's length), imprint (from --contacts) and glow (the LEDs' glow at a clear
+    /// shell's end alone, over the start's light; its [shell_end] sets led_glow_deg); the
+    /// rest is held at the start sensor's values.
     #[arg(long, default_value = "lens,light,imprint")]
     fit: String,
     /// Starting rotations of the LEDs tried (more find a better fit more often, and take
