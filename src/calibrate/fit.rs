@@ -4,7 +4,7 @@
 //! a coarse sample, the best polished on a fine one.
 
 use super::frames::SATURATED;
-use super::model::{unclipped_level, Model, Samples};
+use super::model::{recorded, Model, Samples};
 use super::solve::{invert, levenberg_marquardt, solve_dense, Fit};
 use crate::render::leds;
 use crate::sensor::Lighting;
@@ -121,13 +121,7 @@ pub fn fit_empty(
         polish_free(&model, fine, &best.params, &lens, polish_iterations)
     };
     let fit = match model.layout().end_glow {
-        Some(g) => polish_with_end_glow(
-            &model,
-            fine,
-            &from,
-            g..g + 3 * model.leds + 1,
-            polish_iterations,
-        ),
+        Some(glow) => polish_with_end_glow(&model, fine, &from, glow, polish_iterations),
         None => levenberg_marquardt(&from, &model.bounds(), polish_iterations, |q| {
             residuals(&model, fine, q)
         }),
@@ -145,8 +139,7 @@ pub fn fit_empty(
 /// other value held at the start's, each evaluation on the light kept before the end's
 /// scale. `None` when the model does not fit a glow (the start's end sets no spread).
 pub fn fit_end_glow(model: &Model, samples: &Samples, iterations: usize) -> Option<EmptyFit> {
-    let g = model.layout().end_glow?;
-    let glow = g..g + 3 * model.leds + 1;
+    let glow = model.layout().end_glow?;
     let from = model.initial(0.0);
     let cache = GlowCache {
         model,
@@ -271,9 +264,7 @@ impl GlowCache<'_> {
 
     fn bare_light(&self, q: &[f64]) -> BareLight {
         let (model, d) = (self.model, self.model.decode(q));
-        let mut paint = model.start.config.paint.clone();
-        paint.specular = d.specular;
-        paint.shininess = d.shininess;
+        let paint = model.paint(&d);
         let bare = Lighting {
             shell_end: None,
             ..d.lighting.clone()
@@ -322,7 +313,7 @@ impl GlowCache<'_> {
                     Some(end) => {
                         let glow = end.led_glow_deg.map(|spread| match kept {
                             Some(w) if bare.spread == Some(spread) => {
-                                w.iter().zip(leds).map(|(w, led)| led.end_glow * *w).sum()
+                                leds::weighted_end_glow(leds, w.iter().copied())
                             }
                             _ => leds::end_glow(leds, spread, *ray),
                         });
@@ -331,8 +322,7 @@ impl GlowCache<'_> {
                     }
                     None => *light,
                 };
-                let m = camera.mix(light * *gain);
-                std::array::from_fn(|k| unclipped_level(m[k], camera.gamma[k]))
+                recorded(&camera, light * *gain)
             })
             .collect()
     }
@@ -402,9 +392,7 @@ fn colour_slots(model: &Model) -> Vec<usize> {
 /// the light is linear in them, so this puts each start near its best colours at once.
 pub fn linear_colours(model: &Model, samples: &Samples, p: &mut [f64]) {
     let d = model.decode(p);
-    let mut paint = model.start.config.paint.clone();
-    paint.specular = d.specular;
-    paint.shininess = d.shininess;
+    let paint = model.paint(&d);
     let n = model.leds + 1;
     let gamma = d.lighting.camera.gamma;
     let l = model.layout();
@@ -537,11 +525,12 @@ mod tests {
             camera: true,
             ..Model::point(sensor, 9)
         };
-        let g = model.layout().end_glow.expect("the glow is fitted");
+        let glow = model.layout().end_glow.expect("the glow is fitted");
+        let g = glow.start;
         let cache = GlowCache {
             model: &model,
             samples: &samples,
-            glow: g..g + 3 * model.leds + 1,
+            glow,
             kept: std::sync::RwLock::new(None),
         };
         let p = model.initial(0.0);

@@ -53,8 +53,8 @@ pub struct Layout {
     /// (mm). Its inner radius is held (the build's).
     pub shell_end: Option<usize>,
     /// Each LED's glow at that end (RGB, by LED) and how far round it spreads (deg), when
-    /// the start's end has `led_glow_deg`.
-    pub end_glow: Option<usize>,
+    /// the start's end has `led_glow_deg`: all of their values.
+    pub end_glow: Option<std::ops::Range<usize>>,
     pub len: usize,
 }
 
@@ -180,7 +180,11 @@ impl Model {
             .shell_end
             .is_some()
             .then(|| take(SHELL_END_VALUES));
-        let end_glow = self.fits_end_glow().then(|| take(3 * self.leds + 1));
+        let glow_values = 3 * self.leds + 1;
+        let end_glow = self.fits_end_glow().then(|| {
+            let from = take(glow_values);
+            from..from + glow_values
+        });
         Layout {
             per_led,
             colour,
@@ -477,7 +481,7 @@ impl Model {
             p.extend(end.tip_colour);
             p.extend([end.tip_transmit, end.rim_glow, end.rim_width_mm]);
         }
-        if let (Some(_), Some(end)) = (l.end_glow, &s.config.shell_end) {
+        if let (Some(_), Some(end)) = (&l.end_glow, &s.config.shell_end) {
             for i in 0..self.leds {
                 let glow = match (keep_own, own.get(i)) {
                     (true, Some(led)) => led.end_glow,
@@ -519,8 +523,8 @@ impl Model {
                 let v = &p[i * l.per_led..(i + 1) * l.per_led];
                 let a = v[0].to_radians();
                 let colour = DVec3::from_slice(&v[l.colour..l.colour + 3]);
-                let end_glow = l.end_glow.map_or(DVec3::ZERO, |g| {
-                    DVec3::from_slice(&p[g + 3 * i..g + 3 * i + 3])
+                let end_glow = l.end_glow.as_ref().map_or(DVec3::ZERO, |g| {
+                    DVec3::from_slice(&p[g.start + 3 * i..g.start + 3 * i + 3])
                 });
                 match (self.kind, band) {
                     (LedKindName::Gel, Some((band, z))) => Led {
@@ -579,7 +583,8 @@ impl Model {
                         rim_width_mm: p[i + 6],
                         led_glow_deg: l
                             .end_glow
-                            .map_or(end.led_glow_deg, |g| Some(p[g + 3 * self.leds])),
+                            .as_ref()
+                            .map_or(end.led_glow_deg, |g| Some(p[g.end - 1])),
                         ..end
                     })
                 }),
@@ -636,21 +641,26 @@ impl Model {
         }
     }
 
+    /// The start's paint with the shine the values `d` give it.
+    pub fn paint(&self, d: &Decoded) -> crate::sensor::PaintConfig {
+        crate::sensor::PaintConfig {
+            specular: d.specular,
+            shininess: d.shininess,
+            ..self.start.config.paint.clone()
+        }
+    }
+
     /// The predicted 8-bit colour of every sample, before clipping at 255 (so a fit can see
     /// how far past saturation a value lies).
     pub fn predict(&self, p: &[f64], samples: &Samples) -> Vec<[f64; 3]> {
         let d = self.decode(p);
-        let mut paint = self.start.config.paint.clone();
-        paint.specular = d.specular;
-        paint.shininess = d.shininess;
-        let camera = d.lighting.camera;
+        let paint = self.paint(&d);
         (0..samples.len())
             .map(|i| match self.hit(&d, samples, i) {
                 (Some((hit, place)), x) => {
                     let gain = d.lighting.vignette(x);
                     let light = leds::shade_at(&d.lighting, &paint, &hit, Some(&place));
-                    let c = camera.mix(light * gain);
-                    std::array::from_fn(|k| unclipped_level(c[k], camera.gamma[k]))
+                    recorded(&d.lighting.camera, light * gain)
                 }
                 (None, _) => [0.0; 3],
             })
@@ -667,9 +677,10 @@ impl Model {
         c.lens.cx = d.principal.x;
         c.lens.cy = d.principal.y;
         c.lens.focal_px = d.lens.focal_px;
-        c.paint.specular = d.specular;
-        c.paint.shininess = d.shininess;
-        c.paint.colour = [1.0; 3];
+        c.paint = crate::sensor::PaintConfig {
+            colour: [1.0; 3],
+            ..self.paint(&d)
+        };
         c.light.ambient = Some(d.lighting.ambient.to_array());
         c.light.vignetting = d.lighting.vignetting;
         c.camera = d.lighting.camera;
@@ -744,6 +755,13 @@ pub fn kind_name(kind: LedKind) -> LedKindName {
 
 /// 255 x^(1/gamma) of a linear value, not clipped above (a fit sees how far past full scale
 /// a prediction lies).
-pub(super) fn unclipped_level(linear: f64, gamma: f64) -> f64 {
+fn unclipped_level(linear: f64, gamma: f64) -> f64 {
     255.0 * linear.max(0.0).powf(1.0 / gamma)
+}
+
+/// The 8-bit levels `camera` records for the vignetted linear light `light`, not clipped
+/// above ([`unclipped_level`] of each mixed channel).
+pub(super) fn recorded(camera: &CameraConfig, light: DVec3) -> [f64; 3] {
+    let c = camera.mix(light);
+    std::array::from_fn(|k| unclipped_level(c[k], camera.gamma[k]))
 }

@@ -118,10 +118,18 @@ pub fn shell_end_parts_glowing(
 /// s the spread in radians (a Gaussian of standard deviation s near the LED; periodic, and
 /// found from the directions' dot product alone).
 pub fn end_glow(leds: &[Led], spread_deg: f64, ray: DVec3) -> DVec3 {
-    end_glow_weights(leds, spread_deg, ray)
-        .zip(leds)
-        .map(|(w, led)| led.end_glow * w)
-        .sum()
+    weighted_end_glow(leds, end_glow_weights(leds, spread_deg, ray))
+}
+
+/// The LEDs' `end_glow`s summed with `weights` ([`end_glow_weights`], by LED).
+pub fn weighted_end_glow(leds: &[Led], weights: impl Iterator<Item = f64>) -> DVec3 {
+    weights.zip(leds).map(|(w, led)| led.end_glow * w).sum()
+}
+
+/// How tightly an LED's glow keeps to its azimuth round the end: one over the square of
+/// its spread `spread_deg` in radians.
+pub fn end_glow_concentration(spread_deg: f64) -> f64 {
+    spread_deg.to_radians().powi(-2)
 }
 
 /// Each LED's weight in [`end_glow`] where `ray` crosses the end (0 for a ray along the
@@ -132,7 +140,7 @@ pub fn end_glow_weights(
     ray: DVec3,
 ) -> impl Iterator<Item = f64> + '_ {
     let towards = ray.truncate().try_normalize();
-    let concentration = spread_deg.to_radians().powi(-2);
+    let concentration = end_glow_concentration(spread_deg);
     leds.iter().map(move |led| match towards {
         Some(towards) => {
             let cos_turn = towards.dot(led.position.truncate().normalize_or_zero());

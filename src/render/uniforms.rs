@@ -269,7 +269,7 @@ impl SensorUniform {
                 light
                     .shell_end
                     .and_then(|e| e.led_glow_deg)
-                    .map_or(0.0, |d| d.to_radians().powi(-2) as f32),
+                    .map_or(0.0, |d| super::leds::end_glow_concentration(d) as f32),
                 0.0,
                 0.0,
                 0.0,

@@ -466,11 +466,6 @@ impl Lighting {
         self.ambient_relief != DVec3::ZERO
     }
 
-    /// Whether any LED glows at a clear shell's open end ([`Led::end_glow`]).
-    pub fn has_end_glow(&self) -> bool {
-        self.leds.iter().any(|l| l.end_glow != DVec3::ZERO)
-    }
-
     /// The spread every LED shares, if they share one.
     pub fn shared_spread(&self) -> Option<f64> {
         let first = self.leds.first()?.spread;
