@@ -443,6 +443,9 @@ fn a_hidden_glow_at_the_shell_end_comes_back_over_the_held_light() -> Result<()>
     if let Some(end) = c.shell_end.as_mut() {
         end.led_glow_deg = Some(30.0);
     }
+    if let Leds::List(list) = &mut c.leds {
+        list.iter_mut().for_each(|l| l.end_glow = [0.0; 3]);
+    }
     let start = Sensor::from_config("start", c.clone())?;
     if let Leds::List(list) = &mut c.leds {
         list[0].end_glow = [0.8, 0.0, 0.3];
@@ -497,7 +500,14 @@ fn a_hidden_glow_at_the_shell_end_comes_back_over_the_held_light() -> Result<()>
         .unwrap_err()
         .to_string();
     assert!(err.contains("glow") && !err.contains('\n'), "{err}");
-    o.start = Sensor::preset("allsight")?;
+    let mut plain = Sensor::preset("allsight")?.config;
+    if let Some(end) = plain.shell_end.as_mut() {
+        end.led_glow_deg = None;
+    }
+    if let Leds::List(list) = &mut plain.leds {
+        list.iter_mut().for_each(|l| l.end_glow = [0.0; 3]);
+    }
+    o.start = Sensor::from_config("plain end", plain)?;
     let err = calibrate::calibrate(&o, &|_| {}).unwrap_err().to_string();
     assert!(err.contains("led_glow_deg") && !err.contains('\n'), "{err}");
     Ok(())

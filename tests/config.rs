@@ -483,7 +483,18 @@ fn an_ambient_that_shades_with_tilt_round_trips_and_is_left_out_when_flat() {
 /// its channels above -1; with both it loads, writes and loads back the same.
 #[test]
 fn an_leds_end_glow_needs_the_ends_spread_and_is_refused_on_one_line() {
-    let preset = include_str!("../assets/sensors/allsight.toml");
+    // The `allsight` preset glows; the checks start from it without its glow.
+    let glows = Sensor::preset("allsight").unwrap().lighting();
+    assert!(glows.shell_end.and_then(|e| e.led_glow_deg).is_some());
+    assert!(glows
+        .leds
+        .iter()
+        .any(|l| l.end_glow.abs().max_element() > 0.1));
+    let preset: String = include_str!("../assets/sensors/allsight.toml")
+        .lines()
+        .filter(|l| !l.starts_with("end_glow = ") && !l.starts_with("led_glow_deg = "))
+        .map(|l| format!("{l}\n"))
+        .collect();
     let first_led = "[[leds]]\nkind = \"gel\"\n";
     assert!(preset.contains(first_led));
     let glowing =
