@@ -126,6 +126,35 @@ fn a_hidden_lens_and_light_come_back() -> Result<()> {
     Ok(())
 }
 
+/// Several empty frames of a soft camera (`[camera] blur_px`): the noise they show is
+/// reported, not written into the sensor file (the renderer would blur it; a blurred sensor
+/// with noise is refused), and the file loads. The same frames from a sharp start write it.
+#[test]
+fn a_soft_cameras_noise_is_reported_not_written() -> Result<()> {
+    let dir = tempdir("soft-noise")?;
+    let mut noisy = Sensor::preset("paper")?.config;
+    noisy.render.noise = Noise::Rgb([2.0, 1.5, 2.5]);
+    let frames = empty_frames(&Sensor::from_config("noisy", noisy)?, 2, &dir)?;
+    let mut soft = Sensor::preset("paper")?.config;
+    soft.camera.blur_px = 1.0;
+    let mut o = quick(Sensor::from_config("soft", soft)?, frames.clone());
+    o.fit = calibrate::FitSet::parse("lens")?;
+    let c = calibrate::calibrate(&o, &|_| {})?;
+    assert_eq!(c.config.render.noise.rgb(), [0.0; 3]);
+    assert!(value(&c, "render.noise[2]") > 1.0);
+    let note = c
+        .unconstrained
+        .iter()
+        .find(|n| n.starts_with("render.noise"))
+        .expect("a note on the noise");
+    assert!(note.contains("blur_px") && !note.contains('\n'), "{note}");
+    Sensor::from_config("written", c.config)?;
+    o.start = Sensor::preset("paper")?;
+    let sharp = calibrate::calibrate(&o, &|_| {})?;
+    assert!(sharp.config.render.noise.rgb()[2] > 1.0);
+    Ok(())
+}
+
 /// A camera whose software cuts the picture to a circle of its own: the lens's principal
 /// point 6 px right of and 5 px above the mask's centre and its focal length 7% shorter
 /// than the field of view the mask implies. `--fit lens,principal,focal,light` finds both;

@@ -321,6 +321,16 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
             .to_string(),
     );
     match noise_values(&frames, &circle) {
+        // A soft camera blurs what it records, the renderer's noise with it: the noise
+        // measured is reported, not written.
+        Some((noise, noise_values)) if config.camera.blur_px > 0.0 => {
+            values.extend(noise_values);
+            unconstrained.push(format!(
+                "render.noise: measured ({:.2}, {:.2}, {:.2} levels) but not written: the \
+                 camera's blur_px would blur it; add it afterwards (`dataset --noise`)",
+                noise[0], noise[1], noise[2]
+            ));
+        }
         Some((noise, noise_values)) => {
             config.render.noise = Noise::Rgb(noise);
             values.extend(noise_values);
