@@ -223,6 +223,32 @@ fn stability_refuses_depths_beyond_the_shell() {
     assert!(e.starts_with("depths: ") && e.contains("shell"), "{e}");
 }
 
+/// A camera that blurs would blur the noisy pass's noise: refused on one line that says how
+/// to sweep without it, before anything is rendered; without the noise it sweeps.
+#[test]
+fn stability_refuses_noise_on_a_soft_camera_and_sweeps_without_it() {
+    gpu_env();
+    let s = Sensor::preset("allsight").unwrap();
+    assert!(s.config.camera.blur_px > 0.0);
+    let mut sweep = stability::Sweep {
+        positions: 2,
+        azimuths: 1,
+        depths: vec![0.5],
+        noise: 2.0,
+        hidden_offset_mm: 12.0,
+        empty_frames: 0,
+        methods: vec![Method::Surface],
+    };
+    let e = stability::suite(&s, &sweep).unwrap_err().to_string();
+    assert!(
+        e.contains("blur_px") && e.contains("--noise 0") && !e.contains('\n'),
+        "{e}"
+    );
+    sweep.noise = 0.0;
+    let report = stability::run(&s, &sweep, None, |_, _| {}).unwrap();
+    assert!(!report.trials.is_empty());
+}
+
 #[test]
 fn tradeoff_marks_the_front_and_the_default() {
     gpu_env();

@@ -183,6 +183,17 @@ fn plan(sensor: &Sensor, sweep: &Sweep) -> Result<(Suite, Vec<Role>)> {
     }
     let places = positions(sensor, sweep)?;
     let hidden = hidden_contacts(sensor, sweep);
+    let blur = sensor.config.camera.blur_px;
+    if sweep.noise > 0.0 && blur > 0.0 {
+        return Err(GeltipError::option_value(
+            "noise",
+            sweep.noise,
+            format!(
+                "the sensor's camera blurs (camera.blur_px {blur}), which would blur the noisy \
+                 pass's noise; give --noise 0 to sweep without it"
+            ),
+        ));
+    }
     let passes: &[bool] = if sweep.noise > 0.0 {
         &[false, true]
     } else {
