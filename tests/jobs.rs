@@ -223,13 +223,17 @@ fn stability_refuses_depths_beyond_the_shell() {
     assert!(e.starts_with("depths: ") && e.contains("shell"), "{e}");
 }
 
-/// A camera that blurs would blur the noisy pass's noise: refused on one line that says how
-/// to sweep without it, before anything is rendered; without the noise it sweeps.
+/// A camera that blurs would blur the noisy pass's noise: its default sweep has none, and
+/// noise asked for is refused on one line that says how to sweep without it, before anything
+/// is rendered; without the noise it sweeps.
 #[test]
 fn stability_refuses_noise_on_a_soft_camera_and_sweeps_without_it() {
     gpu_env();
     let s = Sensor::preset("allsight").unwrap();
     assert!(s.config.camera.blur_px > 0.0);
+    assert_eq!(stability::Sweep::default_for(&s).noise, 0.0);
+    let paper = Sensor::preset("paper").unwrap();
+    assert_eq!(stability::Sweep::default_for(&paper).noise, 2.0);
     let mut sweep = stability::Sweep {
         positions: 2,
         azimuths: 1,

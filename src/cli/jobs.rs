@@ -128,9 +128,10 @@ pub struct StabilityArgs {
     /// Press depths (mm, comma separated); default 0.01 .. the shell thickness.
     #[arg(long, value_delimiter = ',')]
     depths: Option<Vec<f64>>,
-    /// Sensor noise of the noisy pass (8-bit grey levels); 0 skips it.
-    #[arg(long, default_value_t = 2.0)]
-    noise: f64,
+    /// Sensor noise of the noisy pass (8-bit grey levels); 0 skips it. Default 2, or 0 for a
+    /// sensor whose camera blurs (camera.blur_px), which would blur the noise.
+    #[arg(long)]
+    noise: Option<f64>,
 }
 
 /// Runs the sweep and prints its table.
@@ -147,9 +148,11 @@ pub fn stability(args: StabilityArgs) -> Result<()> {
     if let Some(d) = args.depths {
         sweep.depths = d;
     }
-    let noise = args.noise;
-    geltip::checks::non_negative(noise).map_err(|reason| anyhow::anyhow!("--noise: {reason}"))?;
-    sweep.noise = noise;
+    if let Some(noise) = args.noise {
+        geltip::checks::non_negative(noise)
+            .map_err(|reason| anyhow::anyhow!("--noise: {reason}"))?;
+        sweep.noise = noise;
+    }
     let bar = progress::bar_or_lines("contacts")?;
     let report = stability::run(&sensor, &sweep, Some(&args.out), |done, total| {
         bar.set_length(total as u64);

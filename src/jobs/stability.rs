@@ -50,7 +50,12 @@ impl Sweep {
             positions: 3,
             azimuths: 2,
             depths: vec![0.01, 0.03, 0.1, 0.3, t],
-            noise: 2.0,
+            // A camera that blurs would blur the renderer's noise: no noisy pass.
+            noise: if sensor.config.camera.blur_px > 0.0 {
+                0.0
+            } else {
+                2.0
+            },
             hidden_offset_mm: 6.0,
             empty_frames: 10,
             methods: Method::ALL.to_vec(),
