@@ -361,3 +361,35 @@ fn objects_from_args() {
     assert!(o.sdf(far) > 0.0 && o.sdf(far) <= Solid::Cone.sdf(far) + 1e-9);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every preset takes a loaded mesh pressed as deep as its gel is thick and tilted (the
+/// contact stage then traces the whole gel grown by the skin's drape): the mesh's baked
+/// distances reach that far, the `allsight` preset's 3.5 mm gel included.
+#[test]
+fn every_preset_takes_a_mesh_pressed_through_its_gel() {
+    use geltip::render::{Hold, Place, Press};
+    use geltip::sensor::{Sensor, PRESETS};
+    use std::sync::Arc;
+    let dir = temp_dir("mesh-reach");
+    let path = dir.join("sphere.obj");
+    Solid::Sphere.mesh().write_obj(&path).unwrap();
+    let object = Arc::new(Object::from_arg(path.to_str().unwrap()).unwrap());
+    for (name, _) in PRESETS {
+        let sensor = Sensor::preset(name).unwrap();
+        let gel = sensor.finger.shell_thickness;
+        let need = gel + 0.5 + sensor.config.elastomer.drape_mm;
+        assert!(
+            object.exact_reach_mm() >= need,
+            "{name}: the mesh is exact {} mm out, the press needs {need}",
+            object.exact_reach_mm()
+        );
+        let mut press = Press::at(object.clone(), Place::Rotation(60.0), 30.0, gel);
+        if let Hold::Surface { tilt_deg, .. } = &mut press.hold {
+            *tilt_deg = 20.0;
+        }
+        let pose = press
+            .pose(&sensor)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(pose.trace_depth_mm + sensor.config.elastomer.drape_mm <= object.exact_reach_mm());
+    }
+}

@@ -36,8 +36,9 @@ pub const MESH_VOXEL_MM: f64 = 0.25;
 
 /// Exact distances (mm) [`Object::from_arg`] bakes around a loaded mesh: the renderer traces
 /// the object grown by the skin's drape radius, down to the press depth, so distances must be
-/// exact that far out (see [`Object::exact_reach_mm`]).
-pub const MESH_PAD_MM: f64 = 5.0;
+/// exact that far out (see [`Object::exact_reach_mm`]): a gel's thickness, 0.5 mm and its
+/// drape, 7.5 mm for the `allsight` preset's 3.5 mm gel.
+pub const MESH_PAD_MM: f64 = 8.0;
 
 /// Something to press into the finger.
 #[derive(Debug, Clone)]
