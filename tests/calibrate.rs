@@ -199,6 +199,13 @@ fn a_lens_behind_a_mask_comes_back() -> Result<()> {
     Ok(())
 }
 
+/// `c` with none of its listed LEDs glowing at a shell's end.
+fn without_end_glow(c: &mut geltip::sensor::SensorConfig) {
+    if let Leds::List(list) = &mut c.leds {
+        list.iter_mut().for_each(|l| l.end_glow = [0.0; 3]);
+    }
+}
+
 fn tempdir(name: &str) -> Result<PathBuf> {
     let dir = std::env::temp_dir().join(format!("geltip-calibrate-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -472,9 +479,7 @@ fn a_hidden_glow_at_the_shell_end_comes_back_over_the_held_light() -> Result<()>
     if let Some(end) = c.shell_end.as_mut() {
         end.led_glow_deg = Some(30.0);
     }
-    if let Leds::List(list) = &mut c.leds {
-        list.iter_mut().for_each(|l| l.end_glow = [0.0; 3]);
-    }
+    without_end_glow(&mut c);
     let start = Sensor::from_config("start", c.clone())?;
     if let Leds::List(list) = &mut c.leds {
         list[0].end_glow = [0.8, 0.0, 0.3];
@@ -533,9 +538,7 @@ fn a_hidden_glow_at_the_shell_end_comes_back_over_the_held_light() -> Result<()>
     if let Some(end) = plain.shell_end.as_mut() {
         end.led_glow_deg = None;
     }
-    if let Leds::List(list) = &mut plain.leds {
-        list.iter_mut().for_each(|l| l.end_glow = [0.0; 3]);
-    }
+    without_end_glow(&mut plain);
     o.start = Sensor::from_config("plain end", plain)?;
     let err = calibrate::calibrate(&o, &|_| {}).unwrap_err().to_string();
     assert!(err.contains("led_glow_deg") && !err.contains('\n'), "{err}");

@@ -323,7 +323,7 @@ pub fn calibrate(options: &Options, progress: &dyn Fn(&str)) -> Result<Calibrati
     match noise_values(&frames, &circle) {
         // A soft camera blurs what it records, the renderer's noise with it: the noise
         // measured is reported, not written.
-        Some((noise, noise_values)) if config.camera.blur_px > 0.0 => {
+        Some((noise, noise_values)) if config.camera.blurs() => {
             values.extend(noise_values);
             unconstrained.push(format!(
                 "render.noise: measured ({:.2}, {:.2}, {:.2} levels) but not written: the \

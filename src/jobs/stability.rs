@@ -51,7 +51,7 @@ impl Sweep {
             azimuths: 2,
             depths: vec![0.01, 0.03, 0.1, 0.3, t],
             // A camera that blurs would blur the renderer's noise: no noisy pass.
-            noise: if sensor.config.camera.blur_px > 0.0 {
+            noise: if sensor.config.camera.blurs() {
                 0.0
             } else {
                 2.0
@@ -188,14 +188,14 @@ fn plan(sensor: &Sensor, sweep: &Sweep) -> Result<(Suite, Vec<Role>)> {
     }
     let places = positions(sensor, sweep)?;
     let hidden = hidden_contacts(sensor, sweep);
-    let blur = sensor.config.camera.blur_px;
-    if sweep.noise > 0.0 && blur > 0.0 {
+    if sweep.noise > 0.0 && sensor.config.camera.blurs() {
         return Err(GeltipError::option_value(
             "noise",
             sweep.noise,
             format!(
-                "the sensor's camera blurs (camera.blur_px {blur}), which would blur the noisy \
-                 pass's noise; give --noise 0 to sweep without it"
+                "the sensor's camera blurs (camera.blur_px {}), which would blur the noisy \
+                 pass's noise; give --noise 0 to sweep without it",
+                sensor.config.camera.blur_px
             ),
         ));
     }

@@ -26,7 +26,7 @@ pub struct Softness {
 impl Softness {
     /// The softness of `sensor`'s camera, or `None` when it has none (`blur_px` 0).
     pub fn of(sensor: &Sensor) -> Option<Softness> {
-        if sensor.config.camera.blur_px <= 0.0 {
+        if !sensor.config.camera.blurs() {
             return None;
         }
         Softness::with_seen(sensor, Softness::seen_by(sensor))

@@ -383,7 +383,7 @@ impl SensorConfig {
         non_negative("paint.specular", self.paint.specular)?;
         finite_positive("paint.shininess", self.paint.shininess)?;
         self.render.noise.validate()?;
-        if self.camera.blur_px > 0.0 && self.render.noise.any() {
+        if self.camera.blurs() && self.render.noise.any() {
             // The renderer adds its noise before the frame reaches the camera's blur.
             return Err(GeltipError::config(
                 "camera.blur_px",

@@ -396,6 +396,12 @@ impl CameraConfig {
         *self == CameraConfig::default()
     }
 
+    /// Whether the camera blurs what it records (`blur_px` above 0): the renderer's noise,
+    /// added before the blur, would be blurred with it, so such a sensor takes none.
+    pub fn blurs(&self) -> bool {
+        self.blur_px > 0.0
+    }
+
     /// Whether the colour response is the default (identity mixing, gamma 2.2 on every
     /// channel): the renderer then takes its plain gamma-2.2 path.
     pub fn has_default_response(&self) -> bool {
